@@ -1,0 +1,121 @@
+"""The paper's experimental conditions and the options that define a task.
+
+Source: Tsutsui, Takeda, Fujii (2023), section 3.2: number of predators (1, 2, 3), cost of a
+step in chase mode (0.01 "low", 0.1 "high") and prey sharing ("shared", "individual"). With one
+predator sharing makes no difference, so the paper has ten conditions and 22 predator panels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+RewardSharing = Literal["shared", "individual"]
+WallRule = Literal["terminate", "contain"]
+
+#: Cost of one step in chase mode, by name (paper 3.2). Stalk mode costs nothing.
+CHASE_COSTS: dict[str, float] = {"low": 0.01, "high": 0.1}
+#: Episode limit in steps: 30 s at dt = 0.1 s (paper 3.1). Reaching it *truncates* the episode.
+MAX_STEPS = 300
+MAX_PREDATORS = 3
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """Everything that defines one pursuit task. Validated on construction."""
+
+    n_predators: int = 1
+    """Number of predators, 1 to 3 (paper 3.2). There is always exactly one prey."""
+    chase_cost: float = CHASE_COSTS["low"]
+    """Reward paid by a predator for each step it spends in chase mode (>= 0)."""
+    reward_sharing: RewardSharing = "shared"
+    """``"shared"``: every predator gets +1 when any predator captures the prey;
+    ``"individual"``: only the predator(s) touching the prey get it."""
+    max_steps: int = MAX_STEPS
+    """Steps after which the episode is truncated (not terminated)."""
+    wall_rule: WallRule = "terminate"
+    """``"terminate"`` (paper): touching a wall costs -1 and ends the episode.
+    ``"contain"``: the wall stops the disk, the -1 is paid on every step in contact and the
+    episode goes on."""
+
+    def __post_init__(self) -> None:
+        if (
+            isinstance(self.n_predators, bool)
+            or not isinstance(self.n_predators, int)
+            or not (1 <= self.n_predators <= MAX_PREDATORS)
+        ):
+            raise ValueError(f"n_predators={self.n_predators!r}: expected an integer from 1 to 3")
+        cost = self.chase_cost
+        if isinstance(cost, bool) or not isinstance(cost, (int, float)) or not math.isfinite(cost) or cost < 0:
+            raise ValueError(f"chase_cost={cost!r}: expected a finite number >= 0")
+        if self.reward_sharing not in ("shared", "individual"):
+            raise ValueError(f"reward_sharing={self.reward_sharing!r}: expected 'shared' or 'individual'")
+        if isinstance(self.max_steps, bool) or not isinstance(self.max_steps, int) or self.max_steps < 1:
+            raise ValueError(f"max_steps={self.max_steps!r}: expected an integer >= 1")
+        if self.wall_rule not in ("terminate", "contain"):
+            raise ValueError(f"wall_rule={self.wall_rule!r}: expected 'terminate' or 'contain'")
+
+    @property
+    def n_agents(self) -> int:
+        return self.n_predators + 1
+
+    @property
+    def agent_names(self) -> tuple[str, ...]:
+        """``predator_0`` … then ``prey_0``: the order of the agent axis in every array."""
+        return (*(f"predator_{i}" for i in range(self.n_predators)), "prey_0")
+
+
+def _paper_conditions() -> dict[str, TaskConfig]:
+    conditions: dict[str, TaskConfig] = {}
+    for n in range(1, MAX_PREDATORS + 1):
+        for cost_name, cost in CHASE_COSTS.items():
+            sharings: tuple[RewardSharing, ...] = ("shared",) if n == 1 else ("shared", "individual")
+            for sharing in sharings:
+                name = f"{n}p-{cost_name}" if n == 1 else f"{n}p-{cost_name}-{sharing}"
+                conditions[name] = TaskConfig(n_predators=n, chase_cost=cost, reward_sharing=sharing)
+    return conditions
+
+
+#: The paper's ten conditions by name: ``"1p-low"``, ``"1p-high"``, ``"2p-low-shared"``, …,
+#: ``"3p-high-individual"``.
+CONDITIONS: dict[str, TaskConfig] = _paper_conditions()
+
+
+def resolve_condition(condition: str | None = None, **options: object) -> TaskConfig:
+    """Build a :class:`TaskConfig` from a condition name and/or explicit options.
+
+    A condition fixes ``n_predators``, ``chase_cost`` and ``reward_sharing``; giving one of those
+    as well is an error (ambiguous). ``max_steps`` and ``wall_rule`` may be set with either.
+    """
+    known = {"n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule"}
+    unknown = set(options) - known
+    if unknown:
+        raise ValueError(f"unknown option(s) {sorted(unknown)}: expected some of {sorted(known)}")
+    given = {k: v for k, v in options.items() if v is not None}
+    if condition is None:
+        return TaskConfig(**given)  # type: ignore[arg-type]
+    if condition not in CONDITIONS:
+        raise ValueError(f"condition={condition!r}: expected one of {', '.join(CONDITIONS)}")
+    clash = sorted({"n_predators", "chase_cost", "reward_sharing"} & set(given))
+    if clash:
+        raise ValueError(f"condition={condition!r} already fixes {clash}; pass either the condition or the options")
+    base = CONDITIONS[condition]
+    return TaskConfig(
+        n_predators=base.n_predators,
+        chase_cost=base.chase_cost,
+        reward_sharing=base.reward_sharing,
+        **given,  # type: ignore[arg-type]
+    )
+
+
+def condition_name(config: TaskConfig) -> str | None:
+    """The paper's name for a config's condition, or None if it is not one of the ten."""
+    for name, c in CONDITIONS.items():
+        if (c.n_predators, c.chase_cost, c.reward_sharing) == (
+            config.n_predators,
+            config.chase_cost,
+            config.reward_sharing,
+        ):
+            return name
+    return None

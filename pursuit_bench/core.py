@@ -1,0 +1,82 @@
+"""One task in B arenas: the world, the task rules and the step counters, batched.
+
+The PettingZoo env is this core at ``B = 1``; the batched env is the same core at any ``B``.
+Everything here is arrays shaped ``(B, n_agents, …)``; no dicts of agent names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pursuit_bench import task
+from pursuit_bench.conditions import TaskConfig
+from pursuit_bench.world import Backend, Contacts, make_world
+
+
+@dataclass
+class StepResult:
+    """What one step of B arenas produced (all arrays have the arena axis first)."""
+
+    observations: np.ndarray
+    """(B, n_agents, 6n-2) float32."""
+    rewards: np.ndarray
+    """(B, n_agents) float64."""
+    terminated: np.ndarray
+    """(B,) bool."""
+    truncated: np.ndarray
+    """(B,) bool: the step limit was reached without termination."""
+    contacts: Contacts
+    modes: np.ndarray
+    """(B, n_predators) the modes used this step."""
+
+
+class PursuitCore:
+    """B arenas of one task. ``reset`` some arenas, ``step`` all of them."""
+
+    def __init__(self, config: TaskConfig, num_arenas: int = 1, *, backend: Backend = "pymunk") -> None:
+        if isinstance(num_arenas, bool) or not isinstance(num_arenas, int) or num_arenas < 1:
+            raise ValueError(f"num_envs={num_arenas!r}: expected an integer >= 1")
+        self.config = config
+        self.num_arenas = num_arenas
+        self.world = make_world(backend, num_arenas, config.n_agents, wall_rule=config.wall_rule)
+        self.steps = np.zeros(num_arenas, dtype=np.int64)
+        self._los = np.zeros((num_arenas, config.n_agents, 2))  # LOS at the current positions
+
+    def reset(self, arenas: np.ndarray, rngs: list[np.random.Generator], positions: np.ndarray | None = None) -> None:
+        """Start the given arenas afresh: positions drawn each from its own generator, or given
+        (``positions`` (len(arenas), n_agents, 2), checked by :func:`task.check_positions`)."""
+        if positions is None:
+            starts = np.stack([task.sample_start(rng, self.config.n_agents) for rng in rngs])
+        else:
+            starts = task.check_positions(positions, (len(arenas), self.config.n_agents, 2))
+        self.world.reset(arenas, starts)
+        self.steps[arenas] = 0
+        self.observe()
+
+    def observe(self) -> np.ndarray:
+        """(B, n_agents, 6n-2) float32 observations at the current state."""
+        obs, self._los = task.observe(self.world.positions, self.world.velocities)
+        return obs
+
+    def state(self) -> np.ndarray:
+        """(B, 4 n_agents) float32 global state: ``[x, y, vx, vy]`` per agent, world frame."""
+        w = self.world
+        return np.concatenate([w.positions, w.velocities], axis=-1).reshape(self.num_arenas, -1).astype(np.float32)
+
+    def step(self, modes: np.ndarray, directions: np.ndarray) -> StepResult:
+        """Advance every arena by one step; ``modes`` (B, n_predators), ``directions`` (B, n_agents)."""
+        acc = task.accelerations(self._los, modes, directions)  # LOS from the last observe()
+        contacts = self.world.step(acc)
+        self.steps += 1
+        result = task.outcome(self.config, contacts, modes)
+        truncated = (self.steps >= self.config.max_steps) & ~result.terminated
+        return StepResult(
+            observations=self.observe(),
+            rewards=result.rewards,
+            terminated=result.terminated,
+            truncated=truncated,
+            contacts=contacts,
+            modes=modes,
+        )

@@ -1,0 +1,293 @@
+"""The pursuit task as a PettingZoo ``ParallelEnv`` (and, through PettingZoo's converter, AEC)."""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, ClassVar
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from pettingzoo import AECEnv, ParallelEnv
+from pettingzoo.utils import parallel_to_aec
+
+from pursuit_bench import task
+from pursuit_bench.conditions import TaskConfig, resolve_condition
+from pursuit_bench.core import PursuitCore, StepResult
+from pursuit_bench.render import draw_arena
+from pursuit_bench.world import Backend
+
+#: Observation bounds: positions lie in [-1, 1], relative positions in [-2√2, 2√2] and speeds
+#: never exceed the chase terminal speed 1.44 (see ``world``), so these bounds always hold.
+_POSITION_BOUND, _RELATIVE_BOUND, _VELOCITY_BOUND = 1.0, 3.0, 2.0
+
+
+def _observation_bounds(n_agents: int) -> np.ndarray:
+    own = [_POSITION_BOUND] * 2 + [_VELOCITY_BOUND] * 2
+    other = [_POSITION_BOUND] * 2 + [_RELATIVE_BOUND] * 2 + [_VELOCITY_BOUND] * 2
+    return np.array(own + other * (n_agents - 1), dtype=np.float32)
+
+
+def _action_error(agent: str, action: Any, allowed: str) -> ValueError:
+    return ValueError(f"action for {agent}: got {action!r}, expected {allowed}")
+
+
+def parse_action(agent: str, action: Any, is_predator: bool) -> tuple[int, int]:
+    """``(mode, direction)`` from one agent's action (the prey's mode is 0), or ``ValueError``."""
+    allowed = "(mode in 0..1, direction in 0..11)" if is_predator else "a direction in 0..11"
+    arr = np.asarray(action)
+    if arr.dtype.kind == "f":
+        if not np.isfinite(arr).all() or (arr != np.round(arr)).any():
+            raise _action_error(agent, action, allowed + " as integers")
+    elif arr.dtype.kind not in "iu":
+        raise _action_error(agent, action, allowed + " as integers")
+    if is_predator:
+        if arr.shape != (2,):
+            raise _action_error(agent, action, allowed + ", shape (2,)")
+        mode, direction = int(arr[0]), int(arr[1])
+        if not (0 <= mode <= 1 and 0 <= direction < task.N_DIRECTIONS):
+            raise _action_error(agent, action, allowed)
+        return mode, direction
+    if arr.size != 1 or arr.ndim > 1:
+        raise _action_error(agent, action, allowed + ", a scalar")
+    direction = int(arr.reshape(()))
+    if not 0 <= direction < task.N_DIRECTIONS:
+        raise _action_error(agent, action, allowed)
+    return 0, direction
+
+
+class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
+    """Predators hunt a prey in a walled 2-D arena (Tsutsui, Takeda, Fujii 2023).
+
+    ## Description
+
+    One prey (``prey_0``, blue) and 1–3 predators (``predator_0`` …, red) are disks of radius
+    0.05 in the square arena ``[-1, 1]²``. Every step (0.1 s) each agent accelerates in one of 12
+    directions relative to its line of sight (LOS): a predator's LOS points at the prey, the
+    prey's at its nearest predator. Velocities lose 25 % per step (viscous drag). Predators also
+    choose a mode: stalk (acceleration 1.8, 60 % of the prey's 3.0) or chase (3.6, 120 %, at a
+    cost). Predators pass through each other.
+
+    ## Action Space
+
+    Direction index ``k`` in 0..11 is the unit vector at ``-k · 30°`` from the LOS (k = 0 straight
+    at the target, 6 straight away).
+
+    | agent | space | meaning |
+    |---|---|---|
+    | ``predator_i`` | ``MultiDiscrete([2, 12])`` | (mode: 0 stalk / 1 chase, direction k) |
+    | ``prey_0`` | ``Discrete(12)`` | direction k |
+
+    ## Observation Space
+
+    ``Box(float32, (6n - 2,))`` per agent for n agents in all (10, 16, 22). (u, v) is the
+    observing agent's LOS frame: u along the LOS, v to its left.
+
+    | index | observation |
+    |---|---|
+    | 0, 1 | own x, y (world frame) |
+    | 2, 3 | own velocity (u, v) |
+    | 4 + 6j, 5 + 6j | other agent j: x, y |
+    | 6 + 6j, 7 + 6j | other agent j: position relative to self (u, v) |
+    | 8 + 6j, 9 + 6j | other agent j: velocity (u, v) |
+
+    Other agents in order: for a predator the prey, then the other predators by index; for the
+    prey the predators by increasing distance.
+
+    ## Rewards
+
+    | event | predator | prey |
+    |---|---|---|
+    | capture (a predator's disk overlaps the prey's) | +1 each (``shared``) / +1 if touching (``individual``) | -1 |
+    | leaving the area (a disk touches or crosses a wall) | -1 to that predator | -1 |
+    | a step in chase mode | ``-chase_cost`` | – |
+
+    Events in one step add up.
+
+    ## Starting State
+
+    Positions uniform in ``[-0.5, 0.5]²`` with no two disks overlapping; velocities zero.
+
+    ## Episode End
+
+    - Termination: a capture, or (``wall_rule="terminate"``) any agent leaving the area.
+    - Truncation: ``max_steps`` steps (300 = 30 s) without termination.
+
+    Either ends the episode for every agent (``env.agents`` becomes empty).
+
+    ## Arguments
+
+    - ``condition``: one of :data:`pursuit_bench.CONDITIONS` (e.g. ``"2p-high-shared"``); it fixes
+      the next three, which may instead be given directly:
+    - ``n_predators`` (1–3, default 1), ``chase_cost`` (≥ 0, default 0.01),
+      ``reward_sharing`` (``"shared"`` default, or ``"individual"``);
+    - ``max_steps`` (default 300);
+    - ``wall_rule``: ``"terminate"`` (default, the paper) or ``"contain"`` (walls stop the disk,
+      -1 per step in contact, the episode goes on);
+    - ``render_mode``: ``None`` or ``"rgb_array"``;
+    - ``backend``: ``"pymunk"`` (default, the reference) or ``"numpy"``.
+
+    ``info[agent]`` holds ``captured`` (this predator touches the prey / the prey was caught),
+    ``left_area``, ``distance_to_prey`` (the prey: to its nearest predator) and, for predators,
+    ``mode`` (0 stalk, 1 chase; -1 at reset).
+
+    ## Version History
+
+    - v0: first release.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "name": "pursuit_v0",
+        "render_modes": ["rgb_array"],
+        "render_fps": 10,
+        "is_parallelizable": True,
+    }
+
+    def __init__(
+        self,
+        condition: str | None = None,
+        *,
+        n_predators: int | None = None,
+        chase_cost: float | None = None,
+        reward_sharing: str | None = None,
+        max_steps: int | None = None,
+        wall_rule: str | None = None,
+        render_mode: str | None = None,
+        backend: Backend = "pymunk",
+    ) -> None:
+        self.config: TaskConfig = resolve_condition(
+            condition,
+            n_predators=n_predators,
+            chase_cost=chase_cost,
+            reward_sharing=reward_sharing,
+            max_steps=max_steps,
+            wall_rule=wall_rule,
+        )
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode={render_mode!r}: expected None or 'rgb_array'")
+        self.condition = condition
+        self.render_mode = render_mode
+        self.possible_agents = list(self.config.agent_names)
+        self.agents: list[str] = []
+        self._core = PursuitCore(self.config, 1, backend=backend)
+        self._n_predators = self.config.n_predators
+        bound = _observation_bounds(self.config.n_agents)
+        self._observation_spaces = {a: spaces.Box(-bound, bound, dtype=np.float32) for a in self.possible_agents}
+        self._action_spaces: dict[str, spaces.Space[Any]] = {
+            a: spaces.MultiDiscrete([2, task.N_DIRECTIONS]) for a in self.possible_agents[:-1]
+        }
+        self._action_spaces["prey_0"] = spaces.Discrete(task.N_DIRECTIONS)
+        state_bound = np.array([_POSITION_BOUND] * 2 + [_VELOCITY_BOUND] * 2, dtype=np.float32)
+        self.state_space = spaces.Box(
+            -np.tile(state_bound, self.config.n_agents), np.tile(state_bound, self.config.n_agents), dtype=np.float32
+        )
+        self.np_random, self.np_random_seed = seeding.np_random()
+
+    @functools.cache  # noqa: B019 - PettingZoo requires the same object
+    def observation_space(self, agent: str) -> spaces.Space[Any]:
+        return self._observation_spaces[agent]
+
+    @functools.cache  # noqa: B019
+    def action_space(self, agent: str) -> spaces.Space[Any]:
+        return self._action_spaces[agent]
+
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, dict[str, Any]]]:
+        """Start a new episode.
+
+        ``options={"positions": array (n_agents, 2)}`` places the agents (in ``possible_agents``
+        order) instead of drawing them; other keys are ignored.
+        """
+        if seed is not None:
+            self.np_random, self.np_random_seed = seeding.np_random(seed)
+        positions = (options or {}).get("positions")
+        if positions is not None:
+            positions = task.check_positions(positions, (self.config.n_agents, 2))[None]
+        self._core.reset(np.array([0]), [self.np_random], positions)
+        self.agents = list(self.possible_agents)
+        obs = self._core.observe()[0]
+        no = np.zeros((1, self.config.n_agents), dtype=bool)
+        infos = self._infos(no[:, :-1], no, np.full((1, self._n_predators), -1))
+        return {a: obs[i] for i, a in enumerate(self.agents)}, infos
+
+    def _infos(self, prey_contact: np.ndarray, wall: np.ndarray, modes: np.ndarray) -> dict[str, dict[str, Any]]:
+        positions = self._core.world.positions[0]
+        gaps = positions[:-1] - positions[-1]
+        distances = np.sqrt((gaps * gaps).sum(axis=-1))
+        infos: dict[str, dict[str, Any]] = {}
+        for i, name in enumerate(self.possible_agents[:-1]):
+            infos[name] = {
+                "captured": bool(prey_contact[0, i]),
+                "left_area": bool(wall[0, i]),
+                "mode": int(modes[0, i]),
+                "distance_to_prey": float(distances[i]),
+            }
+        infos["prey_0"] = {
+            "captured": bool(prey_contact[0].any()),
+            "left_area": bool(wall[0, -1]),
+            "distance_to_prey": float(distances.min()),
+        }
+        return infos
+
+    def step(
+        self, actions: dict[str, Any]
+    ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, bool], dict[str, bool], dict[str, dict[str, Any]]]:
+        if not self.agents:
+            raise ValueError("step() called on a finished episode: call reset() first")
+        unknown = set(actions) - set(self.agents)
+        if unknown:
+            raise ValueError(f"actions for unknown agent(s) {sorted(unknown)}: expected keys {self.agents}")
+        n = self.config.n_agents
+        modes = np.zeros((1, self._n_predators), dtype=np.int64)
+        directions = np.zeros((1, n), dtype=np.int64)
+        for i, agent in enumerate(self.possible_agents):
+            if agent not in actions:
+                raise ValueError(f"missing action for {agent}: every live agent acts each step")
+            mode, direction = parse_action(agent, actions[agent], i < self._n_predators)
+            if i < self._n_predators:
+                modes[0, i] = mode
+            directions[0, i] = direction
+        result = self._core.step(modes, directions)
+        return self._unbatch(result)
+
+    def _unbatch(
+        self, r: StepResult
+    ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, bool], dict[str, bool], dict[str, dict[str, Any]]]:
+        agents = self.possible_agents
+        terminated, truncated = bool(r.terminated[0]), bool(r.truncated[0])
+        obs = {a: r.observations[0, i] for i, a in enumerate(agents)}
+        rewards = {a: float(r.rewards[0, i]) for i, a in enumerate(agents)}
+        infos = self._infos(r.contacts.prey, r.contacts.wall, r.modes)
+        if terminated or truncated:
+            self.agents = []
+        return obs, rewards, dict.fromkeys(agents, terminated), dict.fromkeys(agents, truncated), infos
+
+    def state(self) -> np.ndarray:
+        """Global state, float32 ``[x, y, vx, vy]`` per agent in ``possible_agents`` order."""
+        return self._core.state()[0]
+
+    def render(self) -> np.ndarray | None:
+        """An RGB frame (uint8, 400×400×3) in ``rgb_array`` mode; None when render_mode is None."""
+        if self.render_mode is None:
+            return None
+        return draw_arena(self._core.world.positions[0])
+
+    def close(self) -> None:
+        pass
+
+
+ENV_OPTIONS = ("n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule", "render_mode", "backend")
+
+
+def parallel_env(condition: str | None = None, **options: Any) -> PursuitParallelEnv:
+    """The pursuit env as a PettingZoo ``ParallelEnv``; see :class:`PursuitParallelEnv`."""
+    unknown = sorted(set(options) - set(ENV_OPTIONS))
+    if unknown:
+        raise ValueError(f"unknown option(s) {unknown}: expected some of {list(ENV_OPTIONS)}")
+    return PursuitParallelEnv(condition, **options)
+
+
+def env(condition: str | None = None, **options: Any) -> AECEnv[str, np.ndarray, Any]:
+    """The pursuit env as a PettingZoo AEC env (PettingZoo's conversion of the parallel one)."""
+    return parallel_to_aec(parallel_env(condition, **options))

@@ -1,0 +1,93 @@
+"""Scripted policies: ``act(observation) -> action`` for one observation, ``act_batch`` for a stack.
+
+- :class:`AlwaysChase`, :class:`AlwaysStalk`: a predator at a fixed mode, the direction from
+  parallel navigation (the paper's baselines, section 3.4).
+- :class:`PurePursuitPredator`: a fixed mode, always straight at the prey (for comparison).
+- :class:`FleeingPrey`: flees the nearest predator while keeping off the walls.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+import numpy as np
+
+from pursuit_bench.navigation import parallel_navigation, pure_pursuit
+from pursuit_bench.task import ACCEL_PREY, CHASE, N_DIRECTIONS, STALK, rotate_by_direction
+from pursuit_bench.world import DAMPING, DT, HALF_SIZE, RADIUS
+
+
+class Policy(Protocol):
+    """Anything that maps one agent's observation to that agent's env action."""
+
+    def act(self, observation: np.ndarray) -> Any: ...
+
+
+class _FixedModePredator:
+    mode: int
+
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        """(B, 2) actions ``(mode, direction)`` for (B, obs) observations."""
+        directions = self._directions(np.asarray(observations))
+        return np.stack([np.full_like(directions, self.mode), directions], axis=-1)
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        return self.act_batch(np.asarray(observation)[None])[0]
+
+    def _directions(self, observations: np.ndarray) -> np.ndarray:
+        return parallel_navigation(observations, self.mode)
+
+
+class AlwaysChase(_FixedModePredator):
+    """Chase mode on every step; direction by parallel navigation."""
+
+    mode = CHASE
+
+
+class AlwaysStalk(_FixedModePredator):
+    """Stalk mode on every step; direction by parallel navigation."""
+
+    mode = STALK
+
+
+class PurePursuitPredator(_FixedModePredator):
+    """A fixed mode (chase by default), always heading straight at the prey."""
+
+    def __init__(self, mode: int = CHASE) -> None:
+        self.mode = mode
+
+    def _directions(self, observations: np.ndarray) -> np.ndarray:
+        return pure_pursuit(observations)
+
+
+class FleeingPrey:
+    """Picks the direction whose predicted next position is farthest from the nearest predator's
+    predicted position, minus a penalty for coming within ``wall_margin`` of a wall."""
+
+    def __init__(self, wall_margin: float = 0.25, wall_weight: float = 10.0) -> None:
+        self.wall_margin = wall_margin
+        self.wall_weight = wall_weight
+
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        obs = np.asarray(observations, dtype=np.float64)
+        own = obs[:, 0:2]
+        nearest = obs[:, 4:6]
+        los = nearest - own
+        los = los / np.maximum(np.hypot(los[:, 0], los[:, 1]), 1e-12)[:, None]
+        left = np.stack([-los[:, 1], los[:, 0]], axis=-1)
+        own_v = obs[:, 2:3] * los + obs[:, 3:4] * left
+        n_pred = (obs.shape[1] - 4) // 6
+        preds = obs[:, 4:].reshape(-1, n_pred, 6)
+        pred_v = preds[..., 4:5] * los[:, None] + preds[..., 5:6] * left[:, None]
+        pred_next = preds[..., 0:2] + pred_v * DT  # (B, n_pred, 2)
+        k = np.arange(N_DIRECTIONS)
+        dirs = rotate_by_direction(np.repeat(los[:, None], N_DIRECTIONS, axis=1), k[None])
+        own_next = own[:, None] + ((1 - DAMPING) * own_v[:, None] + ACCEL_PREY * DT * dirs) * DT
+        gap = own_next[:, :, None, :] - pred_next[:, None, :, :]  # (B, 12, n_pred, 2)
+        closest = np.sqrt((gap * gap).sum(-1)).min(-1)
+        safe = HALF_SIZE - RADIUS - self.wall_margin
+        intrusion = np.clip(np.abs(own_next) - safe, 0.0, None).sum(-1)
+        return np.argmax(closest - self.wall_weight * intrusion, axis=1)
+
+    def act(self, observation: np.ndarray) -> int:
+        return int(self.act_batch(np.asarray(observation)[None])[0])

@@ -1,0 +1,33 @@
+"""Draw arenas as RGB frames with numpy alone (no window, no pygame)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pursuit_bench.world import HALF_SIZE, RADIUS
+
+PREDATOR_RGB = (220, 40, 40)
+PREY_RGB = (40, 80, 220)
+WALL_RGB = (0, 0, 0)
+BACKGROUND_RGB = (255, 255, 255)
+
+
+def draw_arena(positions: np.ndarray, size: int = 400) -> np.ndarray:
+    """(size, size, 3) uint8 frame of one arena: black square walls, predators as red disks and
+    the prey (last agent) as a blue disk, drawn at their true radius. ``positions`` (n_agents, 2)."""
+    frame = np.empty((size, size, 3), dtype=np.uint8)
+    frame[:] = BACKGROUND_RGB
+    view = HALF_SIZE * 1.05  # a margin around the walls
+    scale = size / (2 * view)
+    border = max(2, size // 200)
+    lo, hi = round((view - HALF_SIZE) * scale), round((view + HALF_SIZE) * scale)
+    frame[lo - border : lo, lo - border : hi + border] = WALL_RGB
+    frame[hi : hi + border, lo - border : hi + border] = WALL_RGB
+    frame[lo - border : hi + border, lo - border : lo] = WALL_RGB
+    frame[lo - border : hi + border, hi : hi + border] = WALL_RGB
+    centres = (np.arange(size) + 0.5) / scale - view  # pixel centres in world units
+    xs, ys = np.meshgrid(centres, -centres)  # image rows go down, y goes up
+    for i, (x, y) in enumerate(np.asarray(positions)):
+        inside = (xs - x) ** 2 + (ys - y) ** 2 <= RADIUS**2
+        frame[inside] = PREY_RGB if i == len(positions) - 1 else PREDATOR_RGB
+    return frame

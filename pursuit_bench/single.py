@@ -1,0 +1,77 @@
+"""A single-agent Gymnasium view of the pursuit env: one agent learns, the others follow
+policies passed in (by default the scripted ones). Registered as ``pursuit_bench/Pursuit-v0``."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from pursuit_bench.env import PursuitParallelEnv
+from pursuit_bench.policies import AlwaysChase, FleeingPrey, Policy
+
+
+def default_opponent(agent: str) -> Policy:
+    """The scripted stand-in for an agent: always-chase predators, a fleeing prey."""
+    return FleeingPrey() if agent.startswith("prey") else AlwaysChase()
+
+
+class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
+    """One agent of :class:`~pursuit_bench.env.PursuitParallelEnv` as a Gymnasium env.
+
+    Spaces, rewards and episode end are that agent's in the multi-agent env (see its docstring).
+
+    Args:
+        agent: the learning agent, e.g. ``"predator_0"`` or ``"prey_0"``.
+        condition: one of the paper's conditions (default ``"1p-low"``).
+        opponents: policies (``act(observation) -> action``) for some or all of the other agents;
+            the rest get :func:`default_opponent`.
+        render_mode: ``None`` or ``"rgb_array"``.
+        **options: any other option of the multi-agent env (``max_steps``, ``wall_rule`` …).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - typed so by gym.Env
+
+    def __init__(
+        self,
+        agent: str = "predator_0",
+        condition: str | None = "1p-low",
+        opponents: Mapping[str, Policy] | None = None,
+        render_mode: str | None = None,
+        **options: Any,
+    ) -> None:
+        self._env = PursuitParallelEnv(condition, render_mode=render_mode, **options)
+        agents = self._env.possible_agents
+        if agent not in agents:
+            raise ValueError(f"agent={agent!r}: expected one of {agents}")
+        opponents = dict(opponents or {})
+        strangers = sorted(set(opponents) - set(agents) | ({agent} & set(opponents)))
+        if strangers:
+            raise ValueError(f"opponents for {strangers}: expected other agents of {agents}")
+        self.agent = agent
+        self.render_mode = render_mode
+        self.opponents = {a: opponents.get(a) or default_opponent(a) for a in agents if a != agent}
+        self.observation_space = self._env.observation_space(agent)
+        self.action_space = self._env.action_space(agent)
+        self._last_obs: dict[str, np.ndarray] = {}
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        obs, infos = self._env.reset(seed=seed, options=options)
+        self._last_obs = obs
+        return obs[self.agent], infos[self.agent]
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        actions = {a: policy.act(self._last_obs[a]) for a, policy in self.opponents.items()}
+        actions[self.agent] = action
+        obs, rewards, terminated, truncated, infos = self._env.step(actions)
+        self._last_obs = obs
+        a = self.agent
+        return obs[a], rewards[a], terminated[a], truncated[a], infos[a]
+
+    def render(self) -> np.ndarray | None:
+        return self._env.render()

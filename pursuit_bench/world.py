@@ -1,0 +1,279 @@
+"""The physical world: disks in square arenas with viscous damping and walls. Physics only.
+
+Every array is batched over arenas: positions and velocities are ``(B, n_agents, 2)`` float64 in
+each arena's own frame (the arena is ``[-1, 1]²``). Agents ``0 … n_agents-2`` are predators and the
+last one is the prey: the world needs that much to know which pairs pass through each other.
+
+Dynamics (SPEC "World"; authors' code): velocity first, then position, no lag between an action
+and its effect::
+
+    v' = (1 - DAMPING) · v + a · DT
+    p' = p + v' · DT
+
+Two backends share this contract and the interface ``reset(arenas, positions)`` /
+``step(accelerations) -> Contacts``:
+
+- :class:`PymunkWorld` (the reference): one pymunk ``Space`` holds every arena, spaced apart on a
+  grid. We compute ``v'`` in numpy, write every velocity with ``pymunk.batch`` and let
+  ``space.step`` move the bodies (``space.damping = 1``, no forces), so pymunk moves each body by
+  exactly ``v' · DT``. pymunk owns the walls (thick static segments) and the contacts.
+- :class:`NumpyWorld`: the same arithmetic in vectorized numpy, with contacts from distances.
+
+Contacts reported by ``step`` are those at the end of the step. Whatever the speed, no disk ends a
+step outside its arena: a disk that touches or crosses a wall is put back touching it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
+import numpy as np
+import pymunk
+import pymunk.batch
+
+from pursuit_bench.conditions import WallRule
+
+#: Time step in seconds (paper 3.1).
+DT = 0.1
+#: Fraction of velocity lost per step to viscous drag (authors' code, ``damping = 0.25``).
+DAMPING = 0.25
+#: Disk radius of every agent (paper 3.1: diameter 0.1).
+RADIUS = 0.05
+#: Mass of every agent (authors' code).
+MASS = 1.0
+#: Half side of the square arena: x and y in [-1, 1] (paper 3.1).
+HALF_SIZE = 1.0
+#: Thickness of the pymunk walls: more than the longest step (1.44 · 0.1), so no disk tunnels.
+WALL_THICKNESS = 0.5
+#: pymunk's allowed overlap for processed contacts (its default 0.1 is twice our radius).
+COLLISION_SLOP = 1e-6
+
+Backend = Literal["pymunk", "numpy"]
+
+
+@dataclass
+class Contacts:
+    """What touched what at the end of a step."""
+
+    wall: np.ndarray
+    """(B, n_agents) bool: the disk touches or crosses its arena's wall."""
+    prey: np.ndarray
+    """(B, n_predators) bool: the predator's disk overlaps the prey's."""
+
+
+class World(Protocol):
+    num_arenas: int
+    n_agents: int
+    positions: np.ndarray
+    velocities: np.ndarray
+
+    def reset(self, arenas: np.ndarray, positions: np.ndarray) -> None: ...
+
+    def step(self, accelerations: np.ndarray) -> Contacts: ...
+
+
+def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
+    """``v' = (1 - DAMPING) v + a DT``, the velocity half of the dynamics."""
+    return (1.0 - DAMPING) * velocities + accelerations * DT
+
+
+def _put_back_inside(positions: np.ndarray, velocities: np.ndarray, limit: float, wall_rule: WallRule) -> None:
+    """Clamp centres to ``[-limit, limit]`` in place; under ``contain`` also stop the outward
+    velocity of a clamped disk (a perfectly inelastic wall)."""
+    outside = np.abs(positions) > limit
+    if not outside.any():
+        return
+    if wall_rule == "contain":
+        outward = outside & (velocities * positions > 0)
+        velocities[outward] = 0.0
+    np.clip(positions, -limit, limit, out=positions)
+
+
+def _prey_overlap(positions: np.ndarray) -> np.ndarray:
+    delta = positions[:, :-1] - positions[:, -1:]
+    return (delta * delta).sum(axis=-1) < (2 * RADIUS) ** 2
+
+
+class NumpyWorld:
+    """The dynamics in vectorized numpy: the fast backend.
+
+    Contacts are decided on distances: a disk touches the wall when ``|x| >= half_size - r`` (or
+    ``|y|``), a predator overlaps the prey when their centres are closer than ``2 r``. Under
+    ``contain`` a disk that crosses the wall is clamped to it and loses its outward velocity.
+    """
+
+    def __init__(
+        self,
+        num_arenas: int,
+        n_agents: int,
+        *,
+        wall_rule: WallRule = "terminate",
+        half_size: float = HALF_SIZE,
+    ) -> None:
+        self.num_arenas = num_arenas
+        self.n_agents = n_agents
+        self.wall_rule = wall_rule
+        self.limit = half_size - RADIUS
+        self.positions = np.zeros((num_arenas, n_agents, 2))
+        self.velocities = np.zeros((num_arenas, n_agents, 2))
+
+    def reset(self, arenas: np.ndarray, positions: np.ndarray) -> None:
+        self.positions[arenas] = positions
+        self.velocities[arenas] = 0.0
+
+    def step(self, accelerations: np.ndarray) -> Contacts:
+        v = integrate_velocity(self.velocities, accelerations)
+        p = self.positions + v * DT
+        wall = np.logical_or.reduce(np.abs(p) >= self.limit, axis=-1)
+        _put_back_inside(p, v, self.limit, self.wall_rule)
+        self.positions, self.velocities = p, v
+        return Contacts(wall=wall, prey=_prey_overlap(p))
+
+
+_WALL, _PREDATOR, _PREY = 1, 2, 3
+
+
+class PymunkWorld:
+    """The reference backend: every arena in one pymunk ``Space``.
+
+    Arenas sit on a square grid, ``2 (half_size + WALL_THICKNESS)`` apart, so they never touch.
+    Predators share a shape-filter group and so pass through each other; predator–prey contacts
+    are reported by a collision callback and never pushed apart (a capture ends the episode).
+    Wall contacts are reported too; under ``terminate`` they are not resolved (the episode ends
+    and the disk is put back touching the wall), under ``contain`` pymunk resolves them as
+    perfectly inelastic, frictionless contacts.
+    """
+
+    def __init__(
+        self,
+        num_arenas: int,
+        n_agents: int,
+        *,
+        wall_rule: WallRule = "terminate",
+        half_size: float = HALF_SIZE,
+    ) -> None:
+        self.num_arenas = num_arenas
+        self.n_agents = n_agents
+        self.wall_rule = wall_rule
+        self.limit = half_size - RADIUS
+        self._wall = np.zeros((num_arenas, n_agents), dtype=bool)
+        self._prey = np.zeros((num_arenas, n_agents - 1), dtype=bool)
+
+        space = pymunk.Space()
+        space.damping = 1.0  # damping is applied in integrate_velocity, not by pymunk
+        space.collision_slop = COLLISION_SLOP
+        # No positional bias: the position check below puts disks back, so pymunk's own push-out
+        # would correct the same overlap twice and bounce the disk off the wall.
+        space.collision_bias = 1.0
+        self.space = space
+        columns = int(np.ceil(np.sqrt(num_arenas)))
+        spacing = 2 * (half_size + WALL_THICKNESS)
+        self.offsets = np.array(
+            [[(i % columns) * spacing, (i // columns) * spacing] for i in range(num_arenas)],
+            dtype=np.float64,
+        )
+        self._index: dict[pymunk.Shape, tuple[int, int]] = {}
+        predators = pymunk.ShapeFilter(group=1)
+        for arena, (ox, oy) in enumerate(self.offsets):
+            self._add_walls(ox, oy, half_size)
+            for agent in range(n_agents):
+                body = pymunk.Body(MASS, float("inf"))  # disks never rotate
+                body.position = (ox, oy)
+                disk = pymunk.Circle(body, RADIUS)
+                disk.friction = 0.0
+                disk.elasticity = 0.0
+                is_prey = agent == n_agents - 1
+                disk.collision_type = _PREY if is_prey else _PREDATOR
+                if not is_prey:
+                    disk.filter = predators
+                space.add(body, disk)
+                self._index[disk] = (arena, agent)
+        space.on_collision(_PREDATOR, _PREY, pre_solve=self._on_capture)
+        space.on_collision(_PREDATOR, _WALL, pre_solve=self._on_wall)
+        space.on_collision(_PREY, _WALL, pre_solve=self._on_wall)
+
+        self._offsets_per_body = np.repeat(self.offsets, n_agents, axis=0)
+        # Two buffers: reads append into memory pymunk owns (and may grow); writes lend it ours.
+        self._read_buffer = pymunk.batch.Buffer()
+        self._write_buffer = pymunk.batch.Buffer()
+        # pymunk.batch visits the dynamic bodies in the order they were added, then the space's
+        # static body (which holds the walls): one trailing row, kept at zero, stands for it.
+        self._bodies = num_arenas * n_agents
+        self._state = np.zeros((self._bodies + 1, 4))  # px, py, vx, vy per body
+        self._velocity = np.zeros((self._bodies + 1, 2))
+        self.positions = np.zeros((num_arenas, n_agents, 2))
+        self.velocities = np.zeros((num_arenas, n_agents, 2))
+
+    def _add_walls(self, ox: float, oy: float, half_size: float) -> None:
+        t = WALL_THICKNESS / 2  # segment radius: the inner face is at ±half_size
+        c = half_size + t
+        corners = [(-c, -c), (c, -c), (c, c), (-c, c)]
+        for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1], strict=False):
+            wall = pymunk.Segment(self.space.static_body, (ox + ax, oy + ay), (ox + bx, oy + by), t)
+            wall.collision_type = _WALL
+            wall.friction = 0.0
+            wall.elasticity = 0.0
+            self.space.add(wall)
+
+    def _on_capture(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        arena, agent = self._index[arbiter.shapes[0]]
+        self._prey[arena, agent] = True
+        arbiter.process_collision = False
+
+    def _on_wall(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        arena, agent = self._index[arbiter.shapes[0]]
+        self._wall[arena, agent] = True
+        arbiter.process_collision = self.wall_rule == "contain"
+
+    def _read(self) -> None:
+        self._read_buffer.clear()
+        fields = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
+        pymunk.batch.get_space_bodies(self.space, fields, self._read_buffer)
+        state = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
+        shape = (self.num_arenas, self.n_agents, 2)
+        self.positions = (state[:, :2] - self._offsets_per_body).reshape(shape)
+        self.velocities = state[:, 2:].reshape(shape).copy()
+
+    def reset(self, arenas: np.ndarray, positions: np.ndarray) -> None:
+        self.positions[arenas] = positions
+        self.velocities[arenas] = 0.0
+        self._write_all()
+
+    def _write_all(self) -> None:
+        flat = self._state
+        flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
+        flat[:-1, 2:] = self.velocities.reshape(-1, 2)
+        self._write_buffer.set_float_buf(flat.ravel())
+        fields = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
+        pymunk.batch.set_space_bodies(self.space, fields, self._write_buffer)
+
+    def step(self, accelerations: np.ndarray) -> Contacts:
+        self._wall[:] = False
+        self._prey[:] = False
+        self._velocity[:-1] = integrate_velocity(self.velocities, accelerations).reshape(-1, 2)
+        self._write_buffer.set_float_buf(self._velocity.ravel())
+        pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._write_buffer)
+        self.space.step(DT)
+        self._read()
+        wall = self._wall | np.logical_or.reduce(np.abs(self.positions) >= self.limit, axis=-1)
+        if (np.abs(self.positions) > self.limit).any():
+            _put_back_inside(self.positions, self.velocities, self.limit, self.wall_rule)
+            self._write_all()
+        return Contacts(wall=wall, prey=self._prey.copy())
+
+
+def make_world(
+    backend: Backend,
+    num_arenas: int,
+    n_agents: int,
+    *,
+    wall_rule: WallRule = "terminate",
+    half_size: float = HALF_SIZE,
+) -> World:
+    """Build a world of the named backend (``"pymunk"``, the reference, or ``"numpy"``)."""
+    if backend == "pymunk":
+        return PymunkWorld(num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size)
+    if backend == "numpy":
+        return NumpyWorld(num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size)
+    raise ValueError(f"backend={backend!r}: expected 'pymunk' or 'numpy'")

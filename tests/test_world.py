@@ -1,0 +1,110 @@
+"""The world against SPEC's dynamics: closed form, terminal speeds, walls, contacts."""
+
+import numpy as np
+import pytest
+
+from pursuit_bench.task import ACCEL_CHASE, ACCEL_PREY, ACCEL_STALK
+from pursuit_bench.world import DAMPING, DT, RADIUS, make_world
+
+BACKENDS = ["pymunk", "numpy"]
+
+
+def closed_form(p0: np.ndarray, v0: np.ndarray, a: np.ndarray, t: int) -> tuple[np.ndarray, np.ndarray]:
+    """v_t = k^t v0 + a dt (1 - k^t) / (1 - k); p_t = p0 + dt Σ_{s=1..t} v_s, with k = 1 - damping."""
+    k = 1 - DAMPING
+    geo = k * (1 - k**t) / (1 - k)  # Σ_{s=1..t} k^s
+    v = k**t * v0 + a * DT * (1 - k**t) / (1 - k)
+    p = p0 + DT * (v0 * geo + a * DT / (1 - k) * (t - geo))
+    return p, v
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_free_disk_matches_closed_form_for_300_steps(backend: str) -> None:
+    # a huge arena so the disks fly free for all 300 steps
+    world = make_world(backend, 3, 2, half_size=100.0)
+    p0 = np.array([[[0.1, -0.2], [3.0, 3.0]], [[-0.3, 0.4], [-3.0, 3.0]], [[0.0, 0.0], [3.0, -3.0]]])
+    world.reset(np.arange(3), p0)
+    rng = np.random.default_rng(1)
+    a = rng.normal(size=(3, 2, 2)) * 2.0
+    for t in range(1, 301):
+        world.step(a)
+        p, v = closed_form(p0, np.zeros_like(p0), a, t)
+        np.testing.assert_allclose(world.positions, p, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(world.velocities, v, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize(("accel", "speed"), [(ACCEL_PREY, 1.2), (ACCEL_CHASE, 1.44), (ACCEL_STALK, 0.72)])
+def test_terminal_speeds(backend: str, accel: float, speed: float) -> None:
+    world = make_world(backend, 1, 2, half_size=100.0)
+    world.reset(np.array([0]), np.array([[[0.0, 0.0], [5.0, 5.0]]]))
+    a = np.array([[[accel * 0.6, accel * 0.8], [0.0, 0.0]]])
+    for _ in range(300):
+        world.step(a)
+    assert np.hypot(*world.velocities[0, 0]) == pytest.approx(speed, abs=1e-9)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("wall_rule", ["terminate", "contain"])
+@pytest.mark.parametrize("direction", [(1.0, 0.0), (0.0, -1.0), (np.sqrt(0.5), np.sqrt(0.5))])
+def test_disk_driven_at_a_wall_at_chase_speed_never_leaves(backend: str, wall_rule: str, direction: tuple) -> None:
+    world = make_world(backend, 2, 2, wall_rule=wall_rule)  # two arenas: the second one stays put
+    world.reset(np.arange(2), np.array([[[0.0, 0.0], [0.5, 0.5]], [[0.0, 0.0], [0.5, 0.5]]]))
+    a = np.zeros((2, 2, 2))
+    a[0, 0] = np.array(direction) * ACCEL_CHASE
+    # start at terminal speed so the disk crosses the last stretch as fast as it ever can
+    world.velocities[0, 0] = np.array(direction) * 1.44
+    if backend == "pymunk":
+        world._write_all()  # type: ignore[attr-defined]
+    touched = []
+    for _ in range(40):
+        contacts = world.step(a)
+        touched.append(contacts.wall[0, 0])
+        assert (np.abs(world.positions) <= 1 - RADIUS + 1e-12).all()
+        assert not contacts.wall[1].any()
+    first = touched.index(True)
+    assert 0 < first <= 0.95 / (0.144 * max(np.abs(direction))) + 1  # at most 0.144 per step to go
+    if wall_rule == "contain":
+        assert all(touched[first:])  # pressed against the wall: in contact on every later step
+        normal = np.abs(direction) == 1.0
+        assert (np.abs(world.velocities[0, 0][normal]) < 1e-6).all()  # the wall stops the disk
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_predators_pass_through_each_other(backend: str) -> None:
+    world = make_world(backend, 1, 3)  # two predators and a prey
+    p0 = np.array([[[-0.3, 0.0], [0.3, 0.0], [0.0, 0.8]]])
+    world.reset(np.array([0]), p0)
+    a = np.array([[[1.0, 0.0], [-1.0, 0.0], [0.0, 0.0]]]) * ACCEL_CHASE
+    for t in range(1, 8):
+        contacts = world.step(a)
+        p, _ = closed_form(p0, np.zeros_like(p0), a, t)
+        np.testing.assert_allclose(world.positions, p, atol=1e-12)  # no collision response
+        assert not contacts.prey.any() and not contacts.wall.any()
+    assert world.positions[0, 0, 0] > world.positions[0, 1, 0]  # they crossed
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_capture_is_an_overlap_at_the_end_of_a_step(backend: str) -> None:
+    world = make_world(backend, 1, 3)
+    # predator 0 moves towards the prey; predator 1 stays away
+    p0 = np.array([[[0.0, 0.0], [-0.5, -0.5], [0.2, 0.0]]])
+    world.reset(np.array([0]), p0)
+    a = np.array([[[ACCEL_CHASE, 0.0], [0.0, 0.0], [0.0, 0.0]]])
+    captured_at = None
+    for t in range(1, 20):
+        contacts = world.step(a)
+        gap = np.hypot(*(world.positions[0, 0] - world.positions[0, 2]))
+        assert contacts.prey[0, 0] == (gap < 2 * RADIUS)
+        assert not contacts.prey[0, 1]
+        if contacts.prey[0, 0]:
+            captured_at = t
+            p, _ = closed_form(p0, np.zeros_like(p0), a, t)
+            np.testing.assert_allclose(world.positions, p, atol=1e-12)  # never pushed apart
+            break
+    assert captured_at is not None
+
+
+def test_unknown_backend_is_a_value_error() -> None:
+    with pytest.raises(ValueError, match="backend='jax'"):
+        make_world("jax", 1, 2)  # type: ignore[arg-type]
