@@ -34,6 +34,13 @@ def _action_error(agent: str, action: Any, allowed: str) -> ValueError:
 
 def parse_action(agent: str, action: Any, is_predator: bool) -> tuple[int, int]:
     """``(mode, direction)`` from one agent's action (the prey's mode is 0), or ``ValueError``."""
+    # fast paths for what the action spaces sample: an int64 pair, an integer scalar
+    if is_predator and type(action) is np.ndarray and action.dtype == np.int64 and action.shape == (2,):
+        mode, direction = action.tolist()
+        if 0 <= mode <= 1 and 0 <= direction < task.N_DIRECTIONS:
+            return mode, direction
+    elif not is_predator and type(action) in (int, np.int64) and 0 <= action < task.N_DIRECTIONS:
+        return 0, int(action)
     allowed = "(mode in 0..1, direction in 0..11)" if is_predator else "a direction in 0..11"
     arr = np.asarray(action)
     if arr.dtype.kind == "f":
@@ -212,22 +219,19 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         return {a: obs[i] for i, a in enumerate(self.agents)}, infos
 
     def _infos(self, prey_contact: np.ndarray, wall: np.ndarray, modes: np.ndarray) -> dict[str, dict[str, Any]]:
-        positions = self._core.world.positions[0]
-        gaps = positions[:-1] - positions[-1]
-        distances = np.sqrt((gaps * gaps).sum(axis=-1))
-        infos: dict[str, dict[str, Any]] = {}
-        for i, name in enumerate(self.possible_agents[:-1]):
-            infos[name] = {
-                "captured": bool(prey_contact[0, i]),
-                "left_area": bool(wall[0, i]),
-                "mode": int(modes[0, i]),
-                "distance_to_prey": float(distances[i]),
+        z = task.as_complex(self._core.world.positions[0])
+        distances = np.abs(z[:-1] - z[-1]).tolist()
+        touching, walls, mode_list = prey_contact[0].tolist(), wall[0].tolist(), modes[0].tolist()
+        infos: dict[str, dict[str, Any]] = {
+            name: {
+                "captured": touching[i],
+                "left_area": walls[i],
+                "mode": mode_list[i],
+                "distance_to_prey": distances[i],
             }
-        infos["prey_0"] = {
-            "captured": bool(prey_contact[0].any()),
-            "left_area": bool(wall[0, -1]),
-            "distance_to_prey": float(distances.min()),
+            for i, name in enumerate(self.possible_agents[:-1])
         }
+        infos["prey_0"] = {"captured": any(touching), "left_area": walls[-1], "distance_to_prey": min(distances)}
         return infos
 
     def step(
@@ -238,17 +242,13 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         unknown = set(actions) - set(self.agents)
         if unknown:
             raise ValueError(f"actions for unknown agent(s) {sorted(unknown)}: expected keys {self.agents}")
-        n = self.config.n_agents
-        modes = np.zeros((1, self._n_predators), dtype=np.int64)
-        directions = np.zeros((1, n), dtype=np.int64)
+        parsed = []
         for i, agent in enumerate(self.possible_agents):
             if agent not in actions:
                 raise ValueError(f"missing action for {agent}: every live agent acts each step")
-            mode, direction = parse_action(agent, actions[agent], i < self._n_predators)
-            if i < self._n_predators:
-                modes[0, i] = mode
-            directions[0, i] = direction
-        result = self._core.step(modes, directions)
+            parsed.append(parse_action(agent, actions[agent], i < self._n_predators))
+        modes, directions = np.array(parsed, dtype=np.int64).T[:, None, :]
+        result = self._core.step(modes[:, : self._n_predators], directions)
         return self._unbatch(result)
 
     def _unbatch(
@@ -256,8 +256,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, bool], dict[str, bool], dict[str, dict[str, Any]]]:
         agents = self.possible_agents
         terminated, truncated = bool(r.terminated[0]), bool(r.truncated[0])
-        obs = {a: r.observations[0, i] for i, a in enumerate(agents)}
-        rewards = {a: float(r.rewards[0, i]) for i, a in enumerate(agents)}
+        obs = dict(zip(agents, r.observations[0], strict=True))
+        rewards = dict(zip(agents, r.rewards[0].tolist(), strict=True))
         infos = self._infos(r.contacts.prey, r.contacts.wall, r.modes)
         if terminated or truncated:
             self.agents = []

@@ -1,5 +1,5 @@
-"""The paper's task as pure numpy over a batch of arenas: actions to accelerations, observations,
-rewards and episode end. No physics here (see ``world``) and no Python loop over arenas.
+"""The paper's task over a batch of arenas: actions to accelerations, observations, rewards and
+episode end. No physics here (see ``world``).
 
 Array conventions: the agent axis is ``predator_0 … predator_{n-1}, prey_0`` (the prey last);
 positions and velocities are ``(B, n_agents, 2)``; predator modes ``(B, n_predators)`` (0 stalk,
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from pursuit_bench.conditions import TaskConfig
@@ -34,9 +35,10 @@ START_HALF_SIZE = 0.5
 #: ``exp(-i k 30°)``: multiplying a unit LOS (as a complex number) by it gives direction k.
 ROTATIONS = np.exp(-1j * DIRECTION_STEP * np.arange(N_DIRECTIONS))
 
-# Inside this module a 2-D vector is one complex number x + iy: rotating into an agent's LOS
-# frame is a multiplication by the conjugate of its unit LOS, which keeps numpy calls few (the
-# single env runs these functions at B = 1, where the number of calls sets the speed).
+# A 2-D vector is one complex number x + iy here: rotating into an agent's LOS frame is a
+# multiplication by the conjugate of its unit LOS. The per-step work is three small kernels
+# compiled by numba, plain loops over arenas and agents: one implementation for every batch
+# size, fast at B = 1 (the single env) where numpy's per-call overhead would dominate.
 
 
 def as_complex(xy: np.ndarray) -> np.ndarray:
@@ -55,30 +57,79 @@ def obs_size(n_agents: int) -> int:
     return 6 * n_agents - 2
 
 
-def _unit(z: np.ndarray) -> np.ndarray:
-    """Normalise; a zero vector becomes 1 (the +x axis)."""
-    norm = np.abs(z)
-    return np.where(norm > 0, z / np.where(norm > 0, norm, 1.0), 1.0)
+@numba.njit(cache=True)
+def _observe_kernel(z, w, obs, los):
+    """Fill ``obs`` (B, n, 6n-2) float32 and ``los`` (B, n) complex from positions ``z`` and
+    velocities ``w`` (B, n) complex."""
+    batch, n = z.shape
+    n_pred = n - 1
+    order = np.empty(n_pred, np.int64)  # predators by increasing distance to the prey
+    dist = np.empty(n_pred)
+    for b in range(batch):
+        prey = z[b, n_pred]
+        for j in range(n_pred):
+            dist[j] = abs(z[b, j] - prey)
+            order[j] = j
+        for a in range(1, n_pred):  # stable insertion sort: ties keep the lower index first
+            key = order[a]
+            c = a - 1
+            while c >= 0 and dist[order[c]] > dist[key]:
+                order[c + 1] = order[c]
+                c -= 1
+            order[c + 1] = key
+        for i in range(n):
+            d = (prey if i < n_pred else z[b, order[0]]) - z[b, i]
+            m = abs(d)
+            los[b, i] = d / m if m > 0 else 1.0 + 0.0j
+        for i in range(n):
+            to_los = los[b, i].conjugate()
+            zi = z[b, i]
+            wi = w[b, i] * to_los
+            obs[b, i, 0], obs[b, i, 1] = zi.real, zi.imag
+            obs[b, i, 2], obs[b, i, 3] = wi.real, wi.imag
+            s = 4
+            for q in range(n_pred):  # the n - 1 others, in observation order
+                if i == n_pred:
+                    j = order[q]
+                elif q == 0:
+                    j = n_pred
+                else:
+                    j = q - 1 if q - 1 < i else q
+                zj = z[b, j]
+                rel = (zj - zi) * to_los
+                wj = w[b, j] * to_los
+                obs[b, i, s], obs[b, i, s + 1] = zj.real, zj.imag
+                obs[b, i, s + 2], obs[b, i, s + 3] = rel.real, rel.imag
+                obs[b, i, s + 4], obs[b, i, s + 5] = wj.real, wj.imag
+                s += 6
 
 
-def prey_order(positions: np.ndarray) -> np.ndarray:
-    """(B, n_predators) predator indices by increasing distance to the prey (ties: lower index)."""
-    z = as_complex(positions)
-    return np.argsort(np.abs(z[:, :-1] - z[:, -1:]), axis=1, kind="stable")
+def observe(positions: np.ndarray, velocities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Observations and the unit LOS of every agent (SPEC "Observations").
+
+    Returns ``(obs, los)``: obs (B, n_agents, 6 n - 2) float32, for agent i ``[x, y, own velocity
+    (u, v)]`` then, for each other agent, ``[x, y, relative position (u, v), velocity (u, v)]``,
+    (u, v) being agent i's LOS frame (u towards its target, v to the left). The others come in
+    this order: for a predator the prey, then the other predators by index; for the prey the
+    predators by increasing distance (ties: the lower index). los (B, n_agents, 2): each
+    predator's towards the prey, the prey's towards its nearest predator; along +x should two
+    centres coincide.
+    """
+    batch, n, _ = positions.shape
+    obs = np.empty((batch, n, obs_size(n)), dtype=np.float32)
+    los = np.empty((batch, n), dtype=np.complex128)
+    _observe_kernel(as_complex(positions), as_complex(velocities), obs, los)
+    return obs, as_xy(los)
 
 
-def _line_of_sight(z: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """(B, n) complex unit LOS from complex positions and :func:`prey_order`."""
-    los = np.empty_like(z)
-    los[:, :-1] = z[:, -1:] - z[:, :-1]
-    los[:, -1] = np.take_along_axis(z, order[:, :1], axis=1)[:, 0] - z[:, -1]
-    return _unit(los)
+def observations(positions: np.ndarray, velocities: np.ndarray) -> np.ndarray:
+    """(B, n_agents, 6 n - 2) float32 observations; see :func:`observe`."""
+    return observe(positions, velocities)[0]
 
 
 def line_of_sight(positions: np.ndarray) -> np.ndarray:
-    """(B, n_agents, 2) unit LOS: each predator towards the prey, the prey towards its nearest
-    predator."""
-    return as_xy(_line_of_sight(as_complex(positions), prey_order(positions)))
+    """(B, n_agents, 2) unit LOS; see :func:`observe`."""
+    return observe(positions, np.zeros_like(positions))[1]
 
 
 def rotate_by_direction(los: np.ndarray, directions: np.ndarray) -> np.ndarray:
@@ -86,62 +137,24 @@ def rotate_by_direction(los: np.ndarray, directions: np.ndarray) -> np.ndarray:
     return as_xy(as_complex(los) * ROTATIONS[directions])
 
 
-def acceleration_magnitudes(modes: np.ndarray) -> np.ndarray:
-    """(B, n_agents) acceleration magnitudes from predator modes (B, n_predators)."""
-    batch = modes.shape[0]
-    return np.concatenate([np.where(modes == CHASE, ACCEL_CHASE, ACCEL_STALK), np.full((batch, 1), ACCEL_PREY)], axis=1)
+@numba.njit(cache=True)
+def _accelerations_kernel(los, modes, directions, rotations, out):
+    batch, n = los.shape
+    for b in range(batch):
+        for i in range(n):
+            if i == n - 1:
+                magnitude = ACCEL_PREY
+            else:
+                magnitude = ACCEL_CHASE if modes[b, i] == CHASE else ACCEL_STALK
+            out[b, i] = los[b, i] * rotations[directions[b, i]] * magnitude
 
 
 def accelerations(los: np.ndarray, modes: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """(B, n_agents, 2) world-frame accelerations from the unit LOS (B, n_agents, 2), the
-    predators' modes and every agent's direction index."""
-    return as_xy(as_complex(los) * ROTATIONS[directions] * acceleration_magnitudes(modes))
-
-
-_PREDATOR_ORDERS: dict[int, np.ndarray] = {}
-
-
-def others_order(order: np.ndarray) -> np.ndarray:
-    """(B, n_agents, n_agents - 1) indices of the other agents in observation order, from
-    :func:`prey_order`: for a predator the prey then the other predators by index; for the prey
-    the predators by increasing distance."""
-    batch, n_pred = order.shape
-    if n_pred not in _PREDATOR_ORDERS:
-        n = n_pred + 1
-        _PREDATOR_ORDERS[n_pred] = np.array([[n - 1] + [j for j in range(n - 1) if j != i] for i in range(n - 1)])
-    out = np.empty((batch, n_pred + 1, n_pred), dtype=np.intp)
-    out[:, :-1] = _PREDATOR_ORDERS[n_pred]
-    out[:, -1] = order
-    return out
-
-
-def observe(positions: np.ndarray, velocities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Observations and the unit LOS of every agent (SPEC "Observations").
-
-    Returns ``(obs, los)``: obs (B, n_agents, 6 n - 2) float32, for agent i ``[x, y, own velocity
-    (u, v)]`` then, for each other agent in :func:`others_order`, ``[x, y, relative position
-    (u, v), velocity (u, v)]``, (u, v) being agent i's LOS frame; los (B, n_agents, 2).
-    """
-    z, w = as_complex(positions), as_complex(velocities)
-    order = prey_order(positions)
-    los = _line_of_sight(z, order)
-    to_los = np.conj(los)[:, :, None]  # multiplying by it rotates into each agent's LOS frame
-    others = others_order(order)
-    arena = np.arange(z.shape[0])[:, None, None]
-    other_z = z[arena, others]  # (B, n, n-1)
-    n = z.shape[1]
-    out = np.empty((z.shape[0], n, 3 * n - 1), dtype=np.complex128)
-    out[:, :, 0] = z
-    out[:, :, 1] = w * to_los[:, :, 0]
-    out[:, :, 2::3] = other_z
-    out[:, :, 3::3] = (other_z - z[:, :, None]) * to_los
-    out[:, :, 4::3] = w[arena, others] * to_los
-    return out.view(np.float64).astype(np.float32), as_xy(los)
-
-
-def observations(positions: np.ndarray, velocities: np.ndarray) -> np.ndarray:
-    """(B, n_agents, 6 n - 2) float32 observations; see :func:`observe`."""
-    return observe(positions, velocities)[0]
+    predators' modes (B, n_predators) and every agent's direction index (B, n_agents)."""
+    out = np.empty(directions.shape, dtype=np.complex128)
+    _accelerations_kernel(as_complex(los), modes, directions, ROTATIONS, out)
+    return as_xy(out)
 
 
 @dataclass
@@ -156,20 +169,46 @@ class Outcome:
     """(B,) bool: some predator overlaps the prey."""
 
 
+@numba.njit(cache=True)
+def _outcome_kernel(wall, prey, modes, chase_cost, shared, walls_end, rewards, terminated, captured):
+    batch, n = wall.shape
+    n_pred = n - 1
+    for b in range(batch):
+        caught = False
+        for i in range(n_pred):
+            caught = caught or prey[b, i]
+        any_wall = wall[b, n_pred]
+        for i in range(n_pred):
+            r = (1.0 if caught else 0.0) if shared else (1.0 if prey[b, i] else 0.0)
+            r -= 1.0 if wall[b, i] else 0.0
+            r -= chase_cost if modes[b, i] == CHASE else 0.0
+            rewards[b, i] = r
+            any_wall = any_wall or wall[b, i]
+        rewards[b, n_pred] = 0.0 - (1.0 if caught else 0.0) - (1.0 if wall[b, n_pred] else 0.0)
+        captured[b] = caught
+        terminated[b] = caught or (walls_end and any_wall)
+
+
 def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcome:
-    """SPEC's reward table. Events in one step add up."""
-    captured = np.logical_or.reduce(contacts.prey, axis=1)
-    if config.reward_sharing == "shared":
-        predator_reward = np.repeat(captured[:, None], config.n_predators, axis=1).astype(np.float64)
-    else:
-        predator_reward = contacts.prey.astype(np.float64)
-    predator_reward -= contacts.wall[:, :-1]
-    predator_reward -= config.chase_cost * (modes == CHASE)
-    prey_reward = 0.0 - captured - contacts.wall[:, -1]
-    rewards = np.concatenate([predator_reward, prey_reward[:, None]], axis=1)
-    terminated = captured.copy()
-    if config.wall_rule == "terminate":
-        terminated |= np.logical_or.reduce(contacts.wall, axis=1)
+    """SPEC's reward table; events in one step add up. A capture gives +1 to every predator
+    (``shared``) or to each predator touching the prey (``individual``) and -1 to the prey;
+    touching a wall gives -1 to that agent; a step in chase mode costs ``chase_cost``. A capture
+    terminates, and so does a wall contact under the ``terminate`` wall rule."""
+    batch, n = contacts.wall.shape
+    rewards = np.empty((batch, n))
+    terminated = np.empty(batch, dtype=bool)
+    captured = np.empty(batch, dtype=bool)
+    _outcome_kernel(
+        contacts.wall,
+        contacts.prey,
+        modes,
+        float(config.chase_cost),
+        config.reward_sharing == "shared",
+        config.wall_rule == "terminate",
+        rewards,
+        terminated,
+        captured,
+    )
     return Outcome(rewards=rewards, terminated=terminated, captured=captured)
 
 

@@ -78,16 +78,19 @@ def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.
     return (1.0 - DAMPING) * velocities + accelerations * DT
 
 
-def _put_back_inside(positions: np.ndarray, velocities: np.ndarray, limit: float, wall_rule: WallRule) -> None:
-    """Clamp centres to ``[-limit, limit]`` in place; under ``contain`` also stop the outward
-    velocity of a clamped disk (a perfectly inelastic wall)."""
-    outside = np.abs(positions) > limit
-    if not outside.any():
-        return
-    if wall_rule == "contain":
-        outward = outside & (velocities * positions > 0)
-        velocities[outward] = 0.0
-    np.clip(positions, -limit, limit, out=positions)
+def touch_walls(positions: np.ndarray, velocities: np.ndarray, limit: float, wall_rule: WallRule) -> np.ndarray:
+    """(B, n) bool: which disks touch or cross a wall (``|x|`` or ``|y| >= limit``). Those that
+    cross are put back touching it, in place; under ``contain`` they also lose their outward
+    velocity (a perfectly inelastic wall)."""
+    reach = np.abs(positions)
+    touching = reach >= limit
+    wall = touching[..., 0] | touching[..., 1]
+    if wall.any():
+        outside = reach > limit
+        if wall_rule == "contain":
+            velocities[outside & (velocities * positions > 0)] = 0.0
+        np.clip(positions, -limit, limit, out=positions)
+    return wall
 
 
 def _prey_overlap(positions: np.ndarray) -> np.ndarray:
@@ -125,8 +128,7 @@ class NumpyWorld:
     def step(self, accelerations: np.ndarray) -> Contacts:
         v = integrate_velocity(self.velocities, accelerations)
         p = self.positions + v * DT
-        wall = np.logical_or.reduce(np.abs(p) >= self.limit, axis=-1)
-        _put_back_inside(p, v, self.limit, self.wall_rule)
+        wall = touch_walls(p, v, self.limit, self.wall_rule)
         self.positions, self.velocities = p, v
         return Contacts(wall=wall, prey=_prey_overlap(p))
 
@@ -194,14 +196,18 @@ class PymunkWorld:
         space.on_collision(_PREY, _WALL, pre_solve=self._on_wall)
 
         self._offsets_per_body = np.repeat(self.offsets, n_agents, axis=0)
-        # Two buffers: reads append into memory pymunk owns (and may grow); writes lend it ours.
-        self._read_buffer = pymunk.batch.Buffer()
-        self._write_buffer = pymunk.batch.Buffer()
+        self._offset = bool(self.offsets.any())  # a single arena sits at the origin
         # pymunk.batch visits the dynamic bodies in the order they were added, then the space's
         # static body (which holds the walls): one trailing row, kept at zero, stands for it.
+        # Reads append into memory pymunk owns (and may grow); writes lend it two arrays of ours.
         self._bodies = num_arenas * n_agents
+        self._read_buffer = pymunk.batch.Buffer()
         self._state = np.zeros((self._bodies + 1, 4))  # px, py, vx, vy per body
-        self._velocity = np.zeros((self._bodies + 1, 2))
+        self._state_buffer = pymunk.batch.Buffer()
+        self._state_buffer.set_float_buf(self._state.reshape(-1))
+        self._velocity = np.zeros((self._bodies + 1, 2))  # vx, vy per body
+        self._velocity_buffer = pymunk.batch.Buffer()
+        self._velocity_buffer.set_float_buf(self._velocity.reshape(-1))
         self.positions = np.zeros((num_arenas, n_agents, 2))
         self.velocities = np.zeros((num_arenas, n_agents, 2))
 
@@ -232,7 +238,8 @@ class PymunkWorld:
         pymunk.batch.get_space_bodies(self.space, fields, self._read_buffer)
         state = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
         shape = (self.num_arenas, self.n_agents, 2)
-        self.positions = (state[:, :2] - self._offsets_per_body).reshape(shape)
+        positions = state[:, :2] - self._offsets_per_body if self._offset else state[:, :2].copy()
+        self.positions = positions.reshape(shape)
         self.velocities = state[:, 2:].reshape(shape).copy()
 
     def reset(self, arenas: np.ndarray, positions: np.ndarray) -> None:
@@ -244,23 +251,20 @@ class PymunkWorld:
         flat = self._state
         flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
         flat[:-1, 2:] = self.velocities.reshape(-1, 2)
-        self._write_buffer.set_float_buf(flat.ravel())
         fields = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
-        pymunk.batch.set_space_bodies(self.space, fields, self._write_buffer)
+        pymunk.batch.set_space_bodies(self.space, fields, self._state_buffer)
 
     def step(self, accelerations: np.ndarray) -> Contacts:
-        self._wall[:] = False
-        self._prey[:] = False
+        self._wall.fill(False)
+        self._prey.fill(False)
         self._velocity[:-1] = integrate_velocity(self.velocities, accelerations).reshape(-1, 2)
-        self._write_buffer.set_float_buf(self._velocity.ravel())
-        pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._write_buffer)
+        pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._velocity_buffer)
         self.space.step(DT)
         self._read()
-        wall = self._wall | np.logical_or.reduce(np.abs(self.positions) >= self.limit, axis=-1)
-        if (np.abs(self.positions) > self.limit).any():
-            _put_back_inside(self.positions, self.velocities, self.limit, self.wall_rule)
-            self._write_all()
-        return Contacts(wall=wall, prey=self._prey.copy())
+        wall = touch_walls(self.positions, self.velocities, self.limit, self.wall_rule)
+        if wall.any():
+            self._write_all()  # some disk may have been put back inside
+        return Contacts(wall=wall | self._wall, prey=self._prey.copy())
 
 
 def make_world(
