@@ -44,16 +44,19 @@ class PursuitCore:
         self.steps = np.zeros(num_arenas, dtype=np.int64)
         self._los = np.zeros((num_arenas, config.n_agents, 2))  # LOS at the current positions
 
-    def reset(self, arenas: np.ndarray, rngs: list[np.random.Generator], positions: np.ndarray | None = None) -> None:
+    def reset(
+        self, arenas: np.ndarray, rngs: list[np.random.Generator], positions: np.ndarray | None = None
+    ) -> np.ndarray:
         """Start the given arenas afresh: positions drawn each from its own generator, or given
-        (``positions`` (len(arenas), n_agents, 2), checked by :func:`task.check_positions`)."""
+        (``positions`` (len(arenas), n_agents, 2), checked by :func:`task.check_positions`).
+        Returns the observations of every arena (B, n_agents, 6n-2)."""
         if positions is None:
             starts = np.stack([task.sample_start(rng, self.config.n_agents) for rng in rngs])
         else:
             starts = task.check_positions(positions, (len(arenas), self.config.n_agents, 2))
         self.world.reset(arenas, starts)
         self.steps[arenas] = 0
-        self.observe()
+        return self.observe()
 
     def observe(self) -> np.ndarray:
         """(B, n_agents, 6n-2) float32 observations at the current state."""

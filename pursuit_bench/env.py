@@ -211,9 +211,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         positions = (options or {}).get("positions")
         if positions is not None:
             positions = task.check_positions(positions, (self.config.n_agents, 2))[None]
-        self._core.reset(np.array([0]), [self.np_random], positions)
+        obs = self._core.reset(np.array([0]), [self.np_random], positions)[0]
         self.agents = list(self.possible_agents)
-        obs = self._core.observe()[0]
         no = np.zeros((1, self.config.n_agents), dtype=bool)
         infos = self._infos(no[:, :-1], no, np.full((1, self._n_predators), -1))
         return {a: obs[i] for i, a in enumerate(self.agents)}, infos

@@ -1,0 +1,189 @@
+"""Double DQN (van Hasselt et al. 2016) with a dueling network and prioritized replay, for M
+independent members updated as one batched computation.
+
+Each member has its own parameters (a slice of the stacked network), its own replay and, in
+effect, its own Adam: Adam's update is elementwise, and the batched loss is the *sum* of the
+members' losses, so member m's gradient and moments depend on member m's data alone. One
+learner with M members therefore makes exactly the updates of M learners with one member each
+(``tests/test_dqn.py`` checks it).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from pursuit_bench.agents.config import AgentConfig
+from pursuit_bench.agents.network import DuelingQNetwork
+from pursuit_bench.agents.replay import Batch, PrioritizedReplay
+
+
+def double_dqn_targets(
+    online: DuelingQNetwork,
+    target: DuelingQNetwork,
+    rewards: torch.Tensor,
+    next_obs: torch.Tensor,
+    terminated: torch.Tensor,
+    gamma: float,
+) -> torch.Tensor:
+    """``y = r + γ (1 - terminated) Q_target(s', argmax_a Q_online(s', a))``, shapes (M, B).
+
+    Only termination cuts the bootstrap: a truncated transition (time limit) is stored with
+    ``terminated = 0`` and bootstraps from its real next observation.
+    """
+    with torch.no_grad():
+        best = online(next_obs).argmax(dim=-1, keepdim=True)
+        next_value = target(next_obs).gather(-1, best).squeeze(-1)
+        return rewards + gamma * (1.0 - terminated) * next_value
+
+
+class DQNLearner:
+    """M independent double-DQN learners. Arrays passed in and out have the member axis first."""
+
+    def __init__(self, n_obs: int, n_actions: int, config: AgentConfig, *, members: int = 1, seed: int = 0) -> None:
+        self.config, self.members, self.n_obs, self.n_actions = config, members, n_obs, n_actions
+        self.online = DuelingQNetwork(n_obs, n_actions, members=members, seed=seed)
+        self.target = DuelingQNetwork(n_obs, n_actions, members=members, seed=seed)
+        self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
+        self.target.requires_grad_(False)
+        self.optimizer = torch.optim.Adam(self.online.parameters(), lr=config.learning_rate)
+        self.replays = [
+            PrioritizedReplay(
+                config.buffer_size,
+                n_obs,
+                alpha=config.alpha,
+                priority_epsilon=config.priority_epsilon,
+                prioritized=config.prioritized,
+            )
+            for _ in range(members)
+        ]
+        self.rng = np.random.default_rng(seed)  # exploration and replay sampling
+        self.steps = 0  # transitions stored per member
+        self.updates = 0
+        self._owed_updates = 0.0  # replay_ratio × transitions, not yet done
+        self._next_target_copy = config.target_update_every
+
+    @property
+    def epsilon(self) -> float:
+        return self.config.epsilon(self.steps)
+
+    @property
+    def beta(self) -> float:
+        return self.config.beta(self.steps)
+
+    def q_values(self, obs: np.ndarray) -> np.ndarray:
+        """Q-values (M, B, A) for observations (M, B, n_obs)."""
+        with torch.no_grad():
+            return self.online(torch.as_tensor(obs, dtype=torch.float32)).numpy()
+
+    def act(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
+        """Actions (M, B): greedy, or ε-greedy when ``explore`` (ε from the schedule unless
+        ``epsilon`` is given)."""
+        actions = self.q_values(obs).argmax(axis=-1)
+        if explore:
+            random = self.rng.random(actions.shape) < (self.epsilon if epsilon is None else epsilon)
+            actions = np.where(random, self.rng.integers(0, self.n_actions, size=actions.shape), actions)
+        return actions
+
+    def store(
+        self, obs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, next_obs: np.ndarray, terminated: np.ndarray
+    ) -> None:
+        """Store k transitions per member (arrays (M, k, …)) and copy the target net whenever
+        another ``target_update_every`` transitions have been stored."""
+        for m, replay in enumerate(self.replays):
+            replay.add(obs[m], actions[m], rewards[m], next_obs[m], terminated[m])
+        k = actions.shape[1]
+        self.steps += k
+        if self.steps >= self.config.learning_starts:
+            self._owed_updates += k * self.config.replay_ratio
+        while self.steps >= self._next_target_copy:
+            self.target.load_state_dict(self.online.state_dict())
+            self._next_target_copy += self.config.target_update_every
+
+    def train(self) -> np.ndarray | None:
+        """Do the updates owed by the replay ratio; the members' last losses (M,), or None."""
+        losses = None
+        while self._owed_updates >= 1.0:
+            self._owed_updates -= 1.0
+            losses = self.update()
+        return losses
+
+    def update(self) -> np.ndarray:
+        """One gradient step for every member on its own prioritized batch; losses (M,)."""
+        return self.learn([replay.sample(self.config.batch_size, self.beta, self.rng) for replay in self.replays])
+
+    def learn(self, batches: list[Batch]) -> np.ndarray:
+        """One gradient step on the given batches (one per member), then their new priorities."""
+        losses, td = self.loss(batches)
+        self.optimizer.zero_grad(set_to_none=True)
+        losses.sum().backward()
+        self.optimizer.step()
+        td_np = td.detach().numpy()
+        for m, (replay, batch) in enumerate(zip(self.replays, batches, strict=True)):
+            replay.update_priorities(batch.indices, td_np[m])
+        self.updates += 1
+        return losses.detach().numpy()
+
+    def loss(self, batches: list[Batch]) -> tuple[torch.Tensor, torch.Tensor]:
+        """Per-member losses (M,) and TD errors (M, B): the Huber loss of ``Q(s, a) - y``
+        weighted by the importance weights, averaged over the batch."""
+
+        def stack(name: str, dtype: torch.dtype) -> torch.Tensor:
+            return torch.as_tensor(np.stack([getattr(b, name) for b in batches]), dtype=dtype)
+
+        obs, next_obs = stack("obs", torch.float32), stack("next_obs", torch.float32)
+        actions = stack("actions", torch.int64)
+        rewards, terminated = stack("rewards", torch.float32), stack("terminated", torch.float32)
+        weights = stack("weights", torch.float32)
+        q = self.online(obs).gather(-1, actions.unsqueeze(-1)).squeeze(-1)
+        y = double_dqn_targets(self.online, self.target, rewards, next_obs, terminated, self.config.gamma)
+        per_sample = F.huber_loss(q, y, reduction="none", delta=self.config.huber_delta)
+        return (weights * per_sample).mean(dim=1), q - y
+
+    def member_state(self, m: int) -> dict[str, Any]:
+        """Member m's parameters, target, Adam moments, replay and counters, as plain data."""
+        adam = [self.optimizer.state[p] for p in self.online.parameters()]
+        return {
+            "online": {k: v[m].clone() for k, v in self.online.state_dict().items()},
+            "target": {k: v[m].clone() for k, v in self.target.state_dict().items()},
+            "adam_step": [float(s["step"]) if s else 0.0 for s in adam],
+            "adam_exp_avg": [s["exp_avg"][m].clone() if s else None for s in adam],
+            "adam_exp_avg_sq": [s["exp_avg_sq"][m].clone() if s else None for s in adam],
+            "replay": {
+                k: (torch.from_numpy(v) if isinstance(v, np.ndarray) else v)
+                for k, v in self.replays[m].state_dict().items()
+            },
+            "steps": self.steps,
+            "updates": self.updates,
+            "owed_updates": self._owed_updates,
+            "next_target_copy": self._next_target_copy,
+            "rng": self.rng.bit_generator.state,
+        }
+
+    def load_member_state(self, m: int, state: dict[str, Any]) -> None:
+        """Restore member m from :meth:`member_state` (counters are shared by all members)."""
+        with torch.no_grad():
+            for net, key in ((self.online, "online"), (self.target, "target")):
+                for name, tensor in net.state_dict().items():
+                    tensor[m] = state[key][name]
+        for p, step, avg, avg_sq in zip(
+            self.online.parameters(), state["adam_step"], state["adam_exp_avg"], state["adam_exp_avg_sq"], strict=True
+        ):
+            if avg is None:
+                continue
+            s = self.optimizer.state[p]
+            if not s:
+                s["step"] = torch.tensor(step)
+                s["exp_avg"] = torch.zeros_like(p)
+                s["exp_avg_sq"] = torch.zeros_like(p)
+            s["step"] = torch.tensor(step)
+            s["exp_avg"][m] = avg
+            s["exp_avg_sq"][m] = avg_sq
+        replay = {k: (v.numpy() if isinstance(v, torch.Tensor) else v) for k, v in state["replay"].items()}
+        self.replays[m].load_state_dict(replay)
+        self.steps, self.updates = int(state["steps"]), int(state["updates"])
+        self._owed_updates, self._next_target_copy = float(state["owed_updates"]), int(state["next_target_copy"])
+        self.rng.bit_generator.state = state["rng"]

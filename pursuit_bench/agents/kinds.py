@@ -1,0 +1,124 @@
+"""The agents: what each learns, what it stores and how it turns a decision into an env action.
+
+- :class:`HierarchicalPredator` (paper 2.4): the network picks the mode (stalk/chase, A = 2);
+  parallel navigation picks the direction. The replay stores the mode, never the direction.
+- :class:`Prey`: the network picks one of the 12 directions (A = 12).
+- :class:`FlatPredator` (ablation): the network picks one of the 24 (mode, direction) pairs,
+  action ``a = 12 · mode + direction``; no rule.
+- :class:`ScriptedAgent`: a scripted policy (always-chase, always-stalk, fleeing prey) behind
+  the same ``act`` / ``act_batch`` interface.
+
+Every agent has ``act(observation, *, explore)`` for one observation and ``act_batch`` for a
+stack (B, n_obs). A learning agent is member ``member`` of a :class:`DQNLearner`, alone
+(one member) or stacked with the other agents of its kind.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+import torch
+
+from pursuit_bench.agents.dqn import DQNLearner
+from pursuit_bench.navigation import parallel_navigation
+from pursuit_bench.policies import Policy
+from pursuit_bench.task import N_DIRECTIONS
+
+
+class LearningAgent:
+    """One agent's view of its learner: member ``member`` of ``learner``."""
+
+    kind: ClassVar[str]
+    n_actions: ClassVar[int]
+
+    def __init__(self, name: str, learner: DQNLearner, member: int = 0) -> None:
+        if learner.n_actions != self.n_actions:
+            raise ValueError(f"{self.kind} needs a learner with {self.n_actions} actions, got {learner.n_actions}")
+        self.name, self.learner, self.member = name, learner, member
+
+    def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        """Env actions for the network's choices (B,) given the observations (B, n_obs)."""
+        raise NotImplementedError
+
+    def decide(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(choices, env_actions)`` for observations (B, n_obs): what the replay stores and
+        what the env receives; ε-greedy when ``explore`` (ε from the schedule unless given).
+        This runs the whole learner; a training loop acts for all members at once through
+        :meth:`DQNLearner.act` and :meth:`to_env` instead."""
+        stacked = np.zeros((self.learner.members, *obs.shape), dtype=np.float32)
+        stacked[self.member] = obs
+        choices = self.learner.act(stacked, explore=explore, epsilon=epsilon)[self.member]
+        return choices, self.to_env(choices, obs)
+
+    def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> np.ndarray:
+        return self.decide(np.asarray(obs, dtype=np.float32), explore=explore, epsilon=epsilon)[1]
+
+    def act(self, observation: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any:
+        return self.act_batch(np.asarray(observation)[None], explore=explore, epsilon=epsilon)[0]
+
+    def _own(self, obs: np.ndarray) -> torch.Tensor:
+        stacked = torch.zeros((self.learner.members, *obs.shape))
+        stacked[self.member] = torch.as_tensor(obs, dtype=torch.float32)
+        return stacked
+
+    def q_values(self, obs: np.ndarray) -> np.ndarray:
+        """Q-values (B, A) of the online network."""
+        return self.learner.q_values(self._own(obs).numpy())[self.member]
+
+    def value_features(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The value stream's last hidden layer (B, 32) and V(s) (B,): the paper's Fig. 3 input."""
+        with torch.no_grad():
+            hidden, value, _ = self.learner.online.streams(self._own(obs))
+        return hidden[self.member].numpy(), value[self.member, :, 0].numpy()
+
+
+class HierarchicalPredator(LearningAgent):
+    """Deep RL picks how hard (stalk 0 / chase 1); parallel navigation picks where."""
+
+    kind = "hierarchical"
+    n_actions = 2
+
+    def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        return np.stack([choices, parallel_navigation(obs, choices)], axis=-1)
+
+
+class Prey(LearningAgent):
+    """Deep RL over the 12 directions."""
+
+    kind = "prey"
+    n_actions = N_DIRECTIONS
+
+    def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        return choices
+
+
+class FlatPredator(LearningAgent):
+    """Ablation: deep RL over all 24 (mode, direction) pairs, no rule."""
+
+    kind = "flat"
+    n_actions = 2 * N_DIRECTIONS
+
+    def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        return np.stack(np.divmod(choices, N_DIRECTIONS), axis=-1)
+
+
+class ScriptedAgent:
+    """A scripted policy under the agents' interface (``explore`` is ignored)."""
+
+    kind = "scripted"
+
+    def __init__(self, name: str, policy: Policy) -> None:
+        self.name, self.policy = name, policy
+
+    def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> np.ndarray:
+        batch = getattr(self.policy, "act_batch", None)
+        if batch is not None:
+            return np.asarray(batch(np.asarray(obs)))
+        return np.array([self.policy.act(o) for o in obs])
+
+    def act(self, observation: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any:
+        return self.act_batch(np.asarray(observation)[None])[0]
+
+
+KINDS: dict[str, type[LearningAgent]] = {k.kind: k for k in (HierarchicalPredator, Prey, FlatPredator)}

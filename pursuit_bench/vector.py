@@ -1,0 +1,91 @@
+"""Many arenas stepped at once: the same core as the single env, with stacked arrays.
+
+Autoreset is *same-step*: when an arena's episode ends on a step, that step's rewards,
+``terminated`` and ``truncated`` belong to the ended episode, the returned observation is
+already the first of the arena's next episode, and the ended episode's last observation is in
+``info["final_observation"]`` (valid where ``info["done"]``). A learner bootstraps from it, unless
+the arena terminated. Each arena draws its start states from its own generator, spawned from
+the seed given to ``reset``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from pursuit_bench import task
+from pursuit_bench.conditions import TaskConfig, resolve_condition
+from pursuit_bench.core import PursuitCore
+from pursuit_bench.world import Backend
+
+
+class VectorPursuitEnv:
+    """``num_envs`` arenas of one condition, stepped together.
+
+    Args:
+        num_envs: number of arenas B.
+        condition: one of :data:`pursuit_bench.CONDITIONS`, or None to give the options.
+        backend: ``"pymunk"`` (the reference, default) or ``"numpy"``.
+        **options: ``n_predators``, ``chase_cost``, ``reward_sharing``, ``max_steps``, ``wall_rule``.
+
+    ``step(actions)`` takes integers of shape (B, n_agents, 2): ``(mode, direction)`` per agent
+    (the prey's mode is ignored) and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
+    (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
+    with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``captured`` (B,),
+    ``left_area`` (B, n_agents), ``episode_return`` (B, n_agents) and ``episode_length`` (B,)
+    of the episodes that ended.
+    """
+
+    def __init__(self, num_envs: int, condition: str | None = None, *, backend: Backend = "pymunk", **options: Any):
+        self.config: TaskConfig = resolve_condition(condition, **options)
+        self.condition = condition
+        self.num_envs = num_envs
+        self.core = PursuitCore(self.config, num_envs, backend=backend)
+        self.agents = list(self.config.agent_names)
+        self.n_agents = self.config.n_agents
+        self.obs_size = task.obs_size(self.n_agents)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (num_envs, self.n_agents, self.obs_size), np.float32)
+        self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence().spawn(num_envs)]
+        self._returns = np.zeros((num_envs, self.n_agents))
+
+    def reset(self, seed: int | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start every arena afresh; with a seed, reseed every arena's generator from it."""
+        if seed is not None:
+            self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(self.num_envs)]
+        obs = self.core.reset(np.arange(self.num_envs), self._rngs)
+        self._returns[:] = 0.0
+        return obs, {}
+
+    def _check(self, actions: np.ndarray) -> np.ndarray:
+        arr = np.asarray(actions)
+        expected = (self.num_envs, self.n_agents, 2)
+        if arr.shape != expected or arr.dtype.kind not in "iu":
+            raise ValueError(f"actions: expected integers of shape {expected}, got {arr.dtype} {arr.shape}")
+        modes, directions = arr[:, :-1, 0], arr[..., 1]
+        if ((modes < 0) | (modes > 1)).any() or ((directions < 0) | (directions >= task.N_DIRECTIONS)).any():
+            raise ValueError("actions: modes must be 0 (stalk) or 1 (chase) and directions in 0..11")
+        return arr
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        arr = self._check(actions)
+        result = self.core.step(arr[:, :-1, 0], arr[..., 1])
+        self._returns += result.rewards
+        done = result.terminated | result.truncated
+        info: dict[str, Any] = {
+            "done": done,
+            "final_observation": result.observations,
+            "captured": result.contacts.prey.any(axis=1),
+            "left_area": result.contacts.wall,
+            "episode_return": self._returns.copy(),
+            "episode_length": self.core.steps.copy(),
+        }
+        obs = result.observations
+        if done.any():
+            ended = np.flatnonzero(done)
+            obs = self.core.reset(ended, [self._rngs[i] for i in ended])
+            self._returns[ended] = 0.0
+        terminated = np.repeat(result.terminated[:, None], self.n_agents, axis=1)
+        truncated = np.repeat(result.truncated[:, None], self.n_agents, axis=1)
+        return obs, result.rewards, terminated, truncated, info

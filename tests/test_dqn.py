@@ -1,0 +1,154 @@
+"""The network and the double-DQN learner against hand computations, and a small MDP solved."""
+
+import copy
+
+import numpy as np
+import pytest
+import torch
+
+from pursuit_bench.agents.config import QUICK, AgentConfig
+from pursuit_bench.agents.dqn import DQNLearner, double_dqn_targets
+from pursuit_bench.agents.network import DuelingQNetwork
+from pursuit_bench.agents.replay import Batch
+
+
+def naive_forward(net: DuelingQNetwork, obs: np.ndarray, member: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The dueling MLP written out in numpy: returns (Q, V, A) for one member."""
+    p = {k: v[member].detach().numpy().astype(np.float64) for k, v in net.state_dict().items()}
+
+    def linear(name: str, x: np.ndarray) -> np.ndarray:
+        return x @ p[f"{name}.weight"] + p[f"{name}.bias"][0]
+
+    relu = lambda x: np.maximum(x, 0)  # noqa: E731
+    h = relu(linear("trunk2", relu(linear("trunk1", obs))))
+    v = linear("value2", relu(linear("value1", h)))
+    a = linear("advantage2", relu(linear("advantage1", h)))
+    return v + a - a.mean(axis=-1, keepdims=True), v[:, 0], a
+
+
+def test_dueling_aggregation() -> None:
+    net = DuelingQNetwork(10, 5, members=2, seed=3)
+    obs = np.random.default_rng(0).normal(size=(2, 7, 10))
+    q = net(torch.as_tensor(obs, dtype=torch.float32)).detach().numpy()
+    for m in range(2):
+        q_naive, v, _ = naive_forward(net, obs[m], m)
+        np.testing.assert_allclose(q[m], q_naive, atol=1e-5)
+        np.testing.assert_allclose(q[m].mean(axis=-1), v, atol=1e-5)  # mean-subtracted advantages
+    _, value, _ = net.streams(torch.as_tensor(obs, dtype=torch.float32))
+    np.testing.assert_allclose(value[0, :, 0].detach().numpy(), naive_forward(net, obs[0])[1], atol=1e-5)
+
+
+def test_double_dqn_target_by_hand() -> None:
+    online, target = DuelingQNetwork(4, 3, seed=1), DuelingQNetwork(4, 3, seed=2)
+    next_obs = np.random.default_rng(1).normal(size=(1, 6, 4))
+    rewards = np.array([[0.5, -1.0, 0.0, 1.0, 0.2, -0.1]])
+    terminated = np.array([[0, 0, 1, 0, 1, 0]], dtype=np.float64)
+    y = double_dqn_targets(
+        online, target, *(torch.as_tensor(x, dtype=torch.float32) for x in (rewards, next_obs, terminated)), gamma=0.9
+    ).numpy()
+    q_online, _, _ = naive_forward(online, next_obs[0])
+    q_target, _, _ = naive_forward(target, next_obs[0])
+    best = q_online.argmax(axis=1)  # the online net chooses, the target net evaluates
+    expected = rewards[0] + 0.9 * (1 - terminated[0]) * q_target[np.arange(6), best]
+    np.testing.assert_allclose(y[0], expected, atol=1e-5)
+    assert not np.allclose(expected, rewards[0] + 0.9 * (1 - terminated[0]) * q_target.max(axis=1))
+
+
+def test_only_termination_cuts_the_bootstrap() -> None:
+    learner = DQNLearner(3, 2, QUICK, seed=0)
+    obs = np.ones((1, 2, 3), dtype=np.float32)
+    r = torch.tensor([[1.0, 1.0]])
+    y_end = double_dqn_targets(learner.online, learner.target, r, torch.as_tensor(obs), torch.tensor([[1.0, 0.0]]), 0.9)
+    q_next = learner.target(torch.as_tensor(obs))[0, 0]
+    assert y_end[0, 0].item() == pytest.approx(1.0)  # terminated: no bootstrap
+    bootstrap = 1.0 + 0.9 * q_next[learner.online(torch.as_tensor(obs))[0, 0].argmax()].item()
+    assert y_end[0, 1].item() == pytest.approx(bootstrap, abs=1e-6)  # truncated: bootstraps
+
+
+def chain_policy(prioritized: bool, seed: int = 0) -> np.ndarray:
+    """Train on a 6-state chain (right moves on, left moves back, +1 for reaching the right end,
+    which terminates; episodes truncated after 20 steps) and return the greedy actions."""
+    n = 6
+    config = AgentConfig(
+        learning_rate=3e-3,
+        buffer_size=2000,
+        batch_size=32,
+        learning_starts=100,
+        target_update_every=100,
+        epsilon_decay_steps=1000,
+        beta_anneal_steps=3000,
+        prioritized=prioritized,
+    )
+    learner = DQNLearner(n, 2, config, seed=seed)
+    rng = np.random.default_rng(seed)
+    eye = np.eye(n, dtype=np.float32)
+    state, t = 0, 0
+    for _ in range(3000):
+        action = learner.act(eye[state][None, None], explore=True)[0, 0]
+        nxt = min(state + 1, n - 1) if action == 1 else max(state - 1, 0)
+        done = nxt == n - 1
+        learner.store(
+            eye[state][None, None],
+            np.array([[action]]),
+            np.array([[float(done)]]),
+            eye[nxt][None, None],
+            np.array([[float(done)]]),
+        )
+        learner.train()
+        state, t = (0, 0) if done or t >= 19 else (nxt, t + 1)
+        if state == 0 and t == 0:
+            state = int(rng.integers(0, n - 1))
+    return learner.act(eye[None, : n - 1], explore=False)[0]
+
+
+@pytest.mark.parametrize("prioritized", [True, False])
+def test_learner_solves_a_chain(prioritized: bool) -> None:
+    np.testing.assert_array_equal(chain_policy(prioritized), np.ones(5))  # always right
+
+
+def test_one_batched_update_equals_separate_updates() -> None:
+    config = QUICK.replace(batch_size=8)
+    stacked = DQNLearner(10, 2, config, members=3, seed=0)
+    singles = [DQNLearner(10, 2, config, seed=s) for s in range(3)]
+    for m, single in enumerate(singles):  # same starting weights, member by member
+        for net, mine in ((single.online, stacked.online), (single.target, stacked.target)):
+            net.load_state_dict({k: v[m : m + 1].clone() for k, v in mine.state_dict().items()})
+    rng = np.random.default_rng(0)
+    for _ in range(3):  # three steps, so that Adam's moments matter
+        batches = [
+            Batch(
+                indices=np.arange(8),
+                obs=rng.normal(size=(8, 10)).astype(np.float32),
+                actions=rng.integers(0, 2, 8),
+                rewards=rng.normal(size=8).astype(np.float32),
+                next_obs=rng.normal(size=(8, 10)).astype(np.float32),
+                terminated=rng.integers(0, 2, 8).astype(np.float32),
+                weights=rng.random(8).astype(np.float32),
+            )
+            for _ in range(3)
+        ]
+        stacked_losses = stacked.learn(batches)
+        single_losses = [single.learn([b])[0] for single, b in zip(singles, batches, strict=True)]
+        np.testing.assert_allclose(stacked_losses, single_losses, rtol=1e-5)
+    for m, single in enumerate(singles):
+        for k, v in single.online.state_dict().items():
+            np.testing.assert_allclose(stacked.online.state_dict()[k][m].numpy(), v[0].numpy(), atol=1e-6)
+
+
+def test_target_network_starts_as_a_copy_and_is_copied_every_n_transitions() -> None:
+    learner = DQNLearner(3, 2, QUICK.replace(target_update_every=10, learning_starts=0, batch_size=4), seed=0)
+
+    def same() -> bool:
+        return all(
+            torch.equal(a, b) for a, b in zip(learner.online.parameters(), learner.target.parameters(), strict=True)
+        )
+
+    assert same()
+    before = copy.deepcopy(learner.target.state_dict())
+    x = np.zeros((1, 4, 3), dtype=np.float32)
+    learner.store(x, np.zeros((1, 4), dtype=int), np.ones((1, 4)), x, np.zeros((1, 4)))
+    learner.train()
+    assert not same() and all(torch.equal(v, learner.target.state_dict()[k]) for k, v in before.items())
+    y = np.zeros((1, 6, 3), dtype=np.float32)
+    learner.store(y, np.zeros((1, 6), dtype=int), np.ones((1, 6)), y, np.zeros((1, 6)))  # 10 transitions
+    assert same()

@@ -1,0 +1,120 @@
+"""Prioritized replay against a naive reference."""
+
+import numpy as np
+import pytest
+
+from pursuit_bench.agents.config import PAPER
+from pursuit_bench.agents.replay import CumulativeSumSampler, PrioritizedReplay, SumTreeSampler
+
+SAMPLERS = ["flat", "tree"]
+
+
+def filled(n: int, capacity: int = 100, sampler: str = "flat", **kwargs) -> PrioritizedReplay:
+    replay = PrioritizedReplay(capacity, 3, sampler=sampler, **kwargs)
+    obs = np.arange(n * 3, dtype=np.float32).reshape(n, 3)
+    replay.add(obs, np.arange(n) % 2, np.arange(n, dtype=np.float32), obs + 1, np.zeros(n))
+    return replay
+
+
+@pytest.mark.parametrize("sampler", SAMPLERS)
+def test_sampling_frequencies_follow_priorities_to_the_alpha(sampler: str) -> None:
+    replay = filled(20, sampler=sampler, alpha=0.6)
+    td = np.linspace(0.0, 3.0, 20)
+    replay.update_priorities(np.arange(20), td)
+    expected = (np.abs(td) + 1e-4) ** 0.6
+    expected /= expected.sum()
+    np.testing.assert_allclose(replay.probabilities(), expected, rtol=1e-12)
+    draws = 200_000
+    counts = np.bincount(replay.sample(draws, 0.4, np.random.default_rng(0)).indices, minlength=20)
+    sigma = np.sqrt(draws * expected * (1 - expected))
+    # every slot within 4 standard deviations of its binomial expectation
+    assert (np.abs(counts - draws * expected) < 4 * sigma + 1).all()
+
+
+@pytest.mark.parametrize("sampler", SAMPLERS)
+def test_importance_weights_match_the_formula(sampler: str) -> None:
+    replay = filled(10, sampler=sampler, alpha=0.6)
+    td = np.array([0.5, 1.0, 2.0, 0.1, 0.0, 3.0, 0.2, 0.7, 1.5, 0.05])
+    replay.update_priorities(np.arange(10), td)
+    p = (np.abs(td) + 1e-4) ** 0.6
+    prob = p / p.sum()
+    for beta in (0.4, 0.7, 1.0):
+        batch = replay.sample(64, beta, np.random.default_rng(1))
+        naive = (10 * prob[batch.indices]) ** -beta
+        np.testing.assert_allclose(batch.weights, naive / naive.max(), rtol=1e-6)
+        assert batch.weights.max() == pytest.approx(1.0)
+    assert (replay.sample(64, 0.0, np.random.default_rng(2)).weights == 1.0).all()  # β = 0: no correction
+
+
+def test_new_transitions_enter_at_the_largest_priority_seen() -> None:
+    replay = filled(4, alpha=1.0)
+    replay.update_priorities(np.array([0, 1]), np.array([5.0, 0.5]))
+    assert replay.max_priority == pytest.approx(5.0001)
+    replay.add(np.zeros((1, 3)), np.zeros(1), np.zeros(1), np.zeros((1, 3)), np.zeros(1))
+    assert replay.priorities[4] == pytest.approx(5.0001)
+    assert replay.priorities[2] == 1.0  # untouched entries keep the initial maximum
+
+
+@pytest.mark.parametrize("sampler", SAMPLERS)
+def test_wrap_around_when_full_and_never_past_the_filled_region(sampler: str) -> None:
+    replay = PrioritizedReplay(8, 1, sampler=sampler)
+    rng = np.random.default_rng(0)
+    for start in range(0, 13, 3):  # 5 adds of 3: 15 transitions into 8 slots
+        values = np.arange(start, start + 3, dtype=np.float32)[:, None]
+        replay.add(values, np.zeros(3), values[:, 0], values, np.zeros(3))
+        assert replay.sample(500, 0.4, rng).indices.max() < len(replay)
+    assert len(replay) == 8 and replay.position == 15 % 8
+    assert sorted(replay.obs[:, 0].tolist()) == list(range(7, 15))  # the oldest were overwritten
+    assert replay.obs[replay.position - 1, 0] == 14
+
+
+@pytest.mark.parametrize("sampler", SAMPLERS)
+def test_zero_and_tiny_priorities(sampler: str) -> None:
+    replay = filled(6, sampler=sampler, alpha=0.6, priority_epsilon=0.0)
+    replay.update_priorities(np.arange(6), np.array([0.0, 1.0, 0.0, 1e-12, 0.0, 0.0]))
+    indices = replay.sample(100_000, 0.4, np.random.default_rng(0)).indices
+    assert set(np.unique(indices)) <= {1, 3}  # a zero priority is never drawn
+    assert (indices == 1).mean() > 0.99
+    # the last filled slot at zero: rounding at the top must not pick it
+    replay.update_priorities(np.arange(6), np.array([1.0, 0, 0, 0, 0, 0]))
+    assert (replay.sample(1000, 0.4, np.random.default_rng(1)).indices == 0).all()
+
+
+def test_samplers_agree_with_each_other_and_recompute_exactly() -> None:
+    rng = np.random.default_rng(3)
+    flat, tree = CumulativeSumSampler(50), SumTreeSampler(50)
+    for _ in range(2000):  # many small updates: the tree's sums must not drift
+        idx = rng.integers(0, 50, size=4)
+        values = rng.random(4) * 10.0 ** rng.integers(-6, 3)
+        flat.set(idx, values)
+        tree.set(idx, values)
+    assert tree.total(50) == pytest.approx(flat.values.sum(), rel=1e-12)
+    fractions = rng.random(5000)
+    np.testing.assert_array_equal(flat.draw(fractions, 50), tree.draw(fractions, 50))
+
+
+def test_uniform_replay_ignores_priorities() -> None:
+    replay = filled(10, prioritized=False)
+    replay.update_priorities(np.arange(10), np.arange(10.0))
+    batch = replay.sample(50_000, 0.4, np.random.default_rng(0))
+    assert (batch.weights == 1).all()
+    assert np.bincount(batch.indices, minlength=10).min() > 4500
+
+
+def test_beta_is_annealed_and_epsilon_decays() -> None:
+    assert PAPER.beta(0) == 0.4
+    assert PAPER.beta(PAPER.beta_anneal_steps // 2) == pytest.approx(0.7)
+    assert PAPER.beta(10 * PAPER.beta_anneal_steps) == 1.0
+    assert PAPER.epsilon(0) == 1.0 and PAPER.epsilon(5_000) == pytest.approx(0.55)
+    assert PAPER.epsilon(10_000) == pytest.approx(0.1) and PAPER.epsilon(10**7) == pytest.approx(0.1)
+
+
+def test_state_round_trip() -> None:
+    replay = filled(30, capacity=20)
+    replay.update_priorities(np.arange(5), np.arange(5.0))
+    other = PrioritizedReplay(20, 3)
+    other.load_state_dict(replay.state_dict())
+    np.testing.assert_array_equal(other.probabilities(), replay.probabilities())
+    assert (other.position, len(other), other.max_priority) == (replay.position, len(replay), replay.max_priority)
+    with pytest.raises(ValueError, match="does not fit"):
+        PrioritizedReplay(20, 4).load_state_dict(replay.state_dict())
