@@ -49,14 +49,15 @@ class PursuitCore:
     ) -> np.ndarray:
         """Start the given arenas afresh: positions drawn each from its own generator, or given
         (``positions`` (len(arenas), n_agents, 2), checked by :func:`task.check_positions`).
-        Returns the observations of every arena (B, n_agents, 6n-2)."""
+        Returns the observations of those arenas (len(arenas), n_agents, 6n-2)."""
         if positions is None:
-            starts = np.stack([task.sample_start(rng, self.config.n_agents) for rng in rngs])
+            starts = task.sample_starts(rngs, self.config.n_agents)
         else:
             starts = task.check_positions(positions, (len(arenas), self.config.n_agents, 2))
         self.world.reset(arenas, starts)
         self.steps[arenas] = 0
-        return self.observe()
+        obs, self._los[arenas] = task.observe(starts, np.zeros_like(starts))
+        return obs
 
     def observe(self) -> np.ndarray:
         """(B, n_agents, 6n-2) float32 observations at the current state."""

@@ -212,16 +212,26 @@ def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcom
     return Outcome(rewards=rewards, terminated=terminated, captured=captured)
 
 
+def sample_starts(rngs: list[np.random.Generator], n_agents: int) -> np.ndarray:
+    """(len(rngs), n_agents, 2) start positions, uniform in ``[-0.5, 0.5]²``, no two disks
+    overlapping: each arena draws from its own generator until its disks are apart (redrawing is
+    our addition; the paper does not say). Arenas are checked together, but each generator sees
+    the same draws as if its arena were sampled alone."""
+    starts = np.empty((len(rngs), n_agents, 2))
+    pending = np.arange(len(rngs))
+    first, second = np.triu_indices(n_agents, 1)
+    while len(pending):
+        for k in pending:
+            starts[k] = rngs[k].uniform(-START_HALF_SIZE, START_HALF_SIZE, size=(n_agents, 2))
+        gaps = starts[pending][:, first] - starts[pending][:, second]
+        apart = ((gaps * gaps).sum(axis=-1) >= (2 * RADIUS) ** 2).all(axis=1)
+        pending = pending[~apart]
+    return starts
+
+
 def sample_start(rng: np.random.Generator, n_agents: int) -> np.ndarray:
-    """(n_agents, 2) start positions, uniform in ``[-0.5, 0.5]²``, no two disks overlapping
-    (redrawn until they do not; a departure from the paper, which does not say)."""
-    while True:
-        p = rng.uniform(-START_HALF_SIZE, START_HALF_SIZE, size=(n_agents, 2))
-        delta = p[:, None, :] - p[None, :, :]
-        dist2 = (delta * delta).sum(axis=-1)
-        np.fill_diagonal(dist2, np.inf)
-        if (dist2 >= (2 * RADIUS) ** 2).all():
-            return p
+    """(n_agents, 2) start positions for one arena; see :func:`sample_starts`."""
+    return sample_starts([rng], n_agents)[0]
 
 
 def check_positions(positions: object, shape: tuple[int, ...]) -> np.ndarray:

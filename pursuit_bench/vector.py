@@ -84,7 +84,8 @@ class VectorPursuitEnv:
         obs = result.observations
         if done.any():
             ended = np.flatnonzero(done)
-            obs = self.core.reset(ended, [self._rngs[i] for i in ended])
+            obs = obs.copy()  # the ended episodes' last observations stay in the info
+            obs[ended] = self.core.reset(ended, [self._rngs[i] for i in ended])
             self._returns[ended] = 0.0
         terminated = np.repeat(result.terminated[:, None], self.n_agents, axis=1)
         truncated = np.repeat(result.truncated[:, None], self.n_agents, axis=1)

@@ -108,3 +108,18 @@ def test_capture_is_an_overlap_at_the_end_of_a_step(backend: str) -> None:
 def test_unknown_backend_is_a_value_error() -> None:
     with pytest.raises(ValueError, match="backend='jax'"):
         make_world("jax", 1, 2)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("wall_rule", ["terminate", "contain"])
+def test_capture_is_decided_after_a_disk_is_put_back(backend: str, wall_rule: str) -> None:
+    """The prey would end past the wall (0.955) and is put back at 0.95: only then does it
+    overlap the predator (0.1 - 0.003 apart), so the step ends in a capture."""
+    world = make_world(backend, 1, 2, wall_rule=wall_rule)
+    world.reset(np.array([0]), np.array([[[0.0, 0.853], [0.0, 0.94]]]))
+    world.velocities[0, 1] = (0.0, 0.2)  # v' = 0.15, p' = 0.955 without the wall
+    if backend == "pymunk":
+        world._write_all()  # type: ignore[attr-defined]
+    contacts = world.step(np.zeros((1, 2, 2)))
+    assert world.positions[0, 1, 1] == pytest.approx(1 - RADIUS)
+    assert contacts.wall[0, 1] and contacts.prey[0, 0]

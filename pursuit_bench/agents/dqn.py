@@ -49,7 +49,7 @@ class DQNLearner:
         self.target = DuelingQNetwork(n_obs, n_actions, members=members, seed=seed)
         self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
         self.target.requires_grad_(False)
-        self.optimizer = torch.optim.Adam(self.online.parameters(), lr=config.learning_rate)
+        self.optimizer = torch.optim.Adam(self.online.parameters(), lr=config.learning_rate, fused=True)
         self.replays = [
             PrioritizedReplay(
                 config.buffer_size,

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# The speed benchmarks, side by side with the peers (MPE2, VMAS, JaxMARL) in one process each.
+# They get their own environment, .venv-bench: JaxMARL pins an older gymnasium than ours.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "needs Python >= 3.11" >&2; exit 2; }
+[ -x .venv-bench/bin/python ] || python3 -m venv .venv-bench
+.venv-bench/bin/python -m pip install -q --disable-pip-version-check "torch==2.13.0"
+.venv-bench/bin/python -m pip install -q --disable-pip-version-check -e ".[bench]"
+.venv-bench/bin/python benchmarks/bench_env.py "$@"
+.venv-bench/bin/python benchmarks/bench_train.py
