@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
-from pursuit_bench.vector import VectorPursuitEnv
+from pursuit_bench.agents.kinds import HierarchicalPredator
+from pursuit_bench.recording import EpisodeTraces, Recorder
+from pursuit_bench.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.world import Backend
 
 
@@ -40,30 +43,38 @@ def run_episodes(
     num_envs: int = 16,
     epsilons: dict[str, float] | None = None,
     backend: Backend = "pymunk",
+    recorder: Recorder | None = None,
+    record: Callable[[int], bool] = lambda episode: True,
 ) -> Episodes:
     """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
-    ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily."""
+    ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
+    ``recorder``, the episodes numbered (from 1, in the order they end) where ``record`` says so
+    go into it, with the hierarchical predators' Q-values and V(s)."""
     env = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend)
     epsilons = epsilons or {}
     names, n_pred = env.agents, env.n_agents - 1
     obs, _ = env.reset(seed=seed)
+    traces = EpisodeTraces(env.core.world.positions, env.config.max_steps) if recorder is not None else None
     chase = np.zeros((env.num_envs, n_pred))
     travelled = np.zeros((env.num_envs, env.n_agents))
     rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray]] = []
     while len(rows) < episodes:
         actions = np.zeros((env.num_envs, env.n_agents, 2), dtype=np.int64)
+        q_values = np.full((env.num_envs, n_pred, 2), np.nan)
+        values = np.full((env.num_envs, n_pred), np.nan)
         for i, name in enumerate(names):
-            eps = epsilons.get(name)
-            chosen = np.asarray(actors[name].act_batch(obs[:, i], explore=eps is not None, epsilon=eps))
-            if chosen.ndim == 2:
-                actions[:, i] = chosen
+            actor, eps = actors[name], epsilons.get(name)
+            if traces is not None and isinstance(actor, HierarchicalPredator):
+                _, chosen, q_values[:, i], values[:, i] = actor.decide(obs[:, i], explore=eps is not None, epsilon=eps)
             else:
-                actions[:, i, 1] = chosen
+                chosen = np.asarray(actor.act_batch(obs[:, i], explore=eps is not None, epsilon=eps))
+            put_actions(actions, i, chosen)
         before = env.core.world.positions.copy()
-        obs, _, _, _, info = env.step(actions)
-        final = info["final_observation"]  # positions are its first two entries per agent
-        travelled += np.hypot(*(final[..., :2] - before).transpose(2, 0, 1))
+        obs, rewards, _, truncated, info = env.step(actions)
+        travelled += np.hypot(*(info["positions"] - before).transpose(2, 0, 1))
         chase += actions[:, :-1, 0]
+        if traces is not None:
+            traces.add_step(actions, rewards, info, q_values, values)
         for arena in np.flatnonzero(info["done"]):
             length = int(info["episode_length"][arena])
             rows.append(
@@ -77,6 +88,10 @@ def run_episodes(
             )
             chase[arena] = 0.0
             travelled[arena] = 0.0
+            if traces is not None and recorder is not None:
+                trace = traces.finish(int(arena), bool(truncated[arena, 0]), env.core.world.positions[arena])
+                if len(rows) <= episodes and record(len(rows)):
+                    recorder.log_episode(len(rows), trace)
     rows = rows[:episodes]
     return Episodes(
         returns=np.array([r[0] for r in rows]),
@@ -85,3 +100,61 @@ def run_episodes(
         chase_fraction=np.array([r[3] for r in rows]).reshape(len(rows), n_pred),
         distance=np.array([r[4] for r in rows]),
     )
+
+
+def evaluate_agents(
+    condition: str,
+    agents: dict[str, Actor],
+    *,
+    episodes: int,
+    seed: int,
+    prey_epsilon: float | None = 0.1,
+    num_envs: int = 64,
+    recorder: Recorder | None = None,
+    backend: Backend = "pymunk",
+) -> dict[str, Any]:
+    """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
+    learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
+    cumulative reward as trained, then with it replaced by always-chase and by always-stalk,
+    the other agents fixed; every variant plays the same seeds. Also the capture rate, time to
+    capture, distance travelled and fraction of steps in chase, as trained. The episodes as
+    trained go into ``recorder``."""
+    from pursuit_bench.agents.kinds import ScriptedAgent
+    from pursuit_bench.policies import AlwaysChase, AlwaysStalk
+
+    names = list(agents)
+    predators, prey = names[:-1], names[-1]
+    epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
+
+    def play(actors: dict[str, Actor], rec: Recorder | None = None) -> Episodes:
+        return run_episodes(
+            condition, actors, episodes, seed=seed, num_envs=num_envs, epsilons=epsilons, recorder=rec, backend=backend
+        )
+
+    trained = play(agents, recorder)
+    panels = []
+    for i, name in enumerate(predators):
+        chase = play({**agents, name: ScriptedAgent(name, AlwaysChase())})
+        stalk = play({**agents, name: ScriptedAgent(name, AlwaysStalk())})
+        panels.append(
+            {
+                "predator": name,
+                "hierarchical": float(trained.returns[:, i].mean()),
+                "always_chase": float(chase.returns[:, i].mean()),
+                "always_stalk": float(stalk.returns[:, i].mean()),
+            }
+        )
+    captured = trained.captured
+    return {
+        "condition": condition,
+        "episodes": episodes,
+        "seed": seed,
+        "panels": panels,
+        "capture_rate": float(captured.mean()),
+        "time_to_capture_s": float(trained.lengths[captured].mean() * 0.1) if captured.any() else None,
+        "episode_length": float(trained.lengths.mean()),
+        "mean_return": {a: float(r) for a, r in zip(names, trained.returns.mean(axis=0), strict=True)},
+        "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
+        "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
+        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon},
+    }

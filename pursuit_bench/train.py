@@ -19,7 +19,8 @@ from pursuit_bench.agents.dqn import DQNLearner
 from pursuit_bench.agents.kinds import KINDS, LearningAgent, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.policies import AlwaysChase, AlwaysStalk, FleeingPrey
-from pursuit_bench.vector import VectorPursuitEnv
+from pursuit_bench.recording import EpisodeTraces, Recorder
+from pursuit_bench.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.world import Backend
 
 PredatorKind = Literal["hierarchical", "flat", "always_chase", "always_stalk"]
@@ -67,6 +68,16 @@ class TrainConfig:
 
     def to_dict(self) -> dict[str, Any]:
         return {**dataclasses.asdict(self), "agent": self.agent.to_dict()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+        """The inverse of :meth:`to_dict`; unknown keys are a ValueError."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - names)
+        if unknown:
+            raise ValueError(f"unknown training option(s) {unknown}")
+        agent = AgentConfig().replace(**data.get("agent", {}))
+        return cls(**{**data, "agent": agent})
 
 
 @dataclass
@@ -127,10 +138,22 @@ def build_agents(config: TrainConfig, n_obs: int) -> tuple[list[Group], dict[str
 
 
 class Trainer:
-    """Runs :class:`TrainConfig`; ``on_episode`` is called with each finished episode."""
+    """Runs :class:`TrainConfig`; ``on_episode`` is called with each finished episode. With a
+    ``recorder``, every ``record_every``-th episode (and the first) goes into it, and every
+    episode's metrics; without one, no Rerun call is made."""
 
-    def __init__(self, config: TrainConfig, on_episode: Callable[[EpisodeRecord], None] | None = None) -> None:
+    def __init__(
+        self,
+        config: TrainConfig,
+        on_episode: Callable[[EpisodeRecord], None] | None = None,
+        *,
+        recorder: Recorder | None = None,
+        record_every: int = 100,
+    ) -> None:
+        if isinstance(record_every, bool) or not isinstance(record_every, int) or record_every < 1:
+            raise ValueError(f"record_every={record_every!r}: expected an integer >= 1")
         self.config = config
+        self.recorder, self.record_every = recorder, record_every
         self.env = VectorPursuitEnv(config.num_envs, config.condition, backend=config.backend)
         self.groups, self.agents = build_agents(config, self.env.obs_size)
         self.on_episode = on_episode
@@ -141,6 +164,40 @@ class Trainer:
         self.last_losses: dict[str, float] = {}
         self.obs, _ = self.env.reset(seed=config.seed)
         self._chase_steps = np.zeros((config.num_envs, self.n_predators))
+        self._traces = (
+            EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps) if recorder is not None else None
+        )
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything a resumed run needs: every learning agent and the counters."""
+        from pursuit_bench.agents.checkpoint import agent_state
+
+        return {
+            "episodes_done": self.episodes_done,
+            "env_steps": self.env_steps,
+            "config": self.config.to_dict(),
+            "agents": {
+                a.name: agent_state(a, self.config.condition)
+                for a in self.agents.values()
+                if isinstance(a, LearningAgent)
+            },
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore from :meth:`state_dict`. Episodes under way when it was taken are not resumed:
+        every arena starts afresh, from a seed derived from the run's seed and the episode count."""
+        from pursuit_bench.agents.checkpoint import load_agent_state
+
+        learning = {a.name: a for a in self.agents.values() if isinstance(a, LearningAgent)}
+        if set(state["agents"]) != set(learning):
+            raise ValueError(f"checkpoint holds agents {sorted(state['agents'])}, this run has {sorted(learning)}")
+        for name, agent in learning.items():
+            load_agent_state(agent, state["agents"][name], self.config.condition)
+        self.episodes_done, self.env_steps = int(state["episodes_done"]), int(state["env_steps"])
+        self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
+        self._chase_steps[:] = 0.0
+        if self._traces is not None:
+            self._traces = EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps)
 
     def run(self, should_stop: Callable[[], bool] = lambda: False) -> None:
         """Step until the configured number of episodes has finished (or ``should_stop()``)."""
@@ -152,18 +209,23 @@ class Trainer:
         obs = self.obs
         actions = np.zeros((self.config.num_envs, len(self.names), 2), dtype=np.int64)
         choices = []
+        q_values = np.full((self.config.num_envs, self.n_predators, 2), np.nan)  # for recordings
+        values = np.full((self.config.num_envs, self.n_predators), np.nan)
         for group in self.groups:  # one forward pass per group
             group_obs = obs[:, group.indices].transpose(1, 0, 2)  # (M, B, n_obs)
-            chosen = group.learner.act(group_obs, explore=True)
+            q, v = group.learner.evaluate(group_obs)
+            chosen = group.learner.choose(q, explore=True)
             choices.append(chosen)
             for m, (agent, i) in enumerate(zip(group.agents, group.indices, strict=True)):
-                self._put(actions, i, agent.to_env(chosen[m], obs[:, i]))
+                put_actions(actions, i, agent.to_env(chosen[m], obs[:, i]))
+                if agent.kind == "hierarchical":
+                    q_values[:, i], values[:, i] = q[m], v[m]
         for i, name in enumerate(self.names):
             scripted = self.agents[name]
             if isinstance(scripted, ScriptedAgent):
-                self._put(actions, i, scripted.act_batch(obs[:, i]))
+                put_actions(actions, i, scripted.act_batch(obs[:, i]))
 
-        next_obs, rewards, terminated, _, info = self.env.step(actions)
+        next_obs, rewards, terminated, truncated, info = self.env.step(actions)
         done = info["done"]
         real_next = np.where(done[:, None, None], info["final_observation"], next_obs)
         for group, chosen in zip(self.groups, choices, strict=True):
@@ -181,21 +243,19 @@ class Trainer:
 
         self._chase_steps += actions[:, :-1, 0]
         self.env_steps += 1
+        if self._traces is not None:
+            self._traces.add_step(actions, rewards, info, q_values, values)
         for arena in np.flatnonzero(done):
-            self._finish_episode(int(arena), info)
+            self._finish_episode(int(arena), info, bool(truncated[arena, 0]))
         self.obs = next_obs
 
-    @staticmethod
-    def _put(actions: np.ndarray, i: int, env_actions: np.ndarray) -> None:
-        if env_actions.ndim == 2:
-            actions[:, i] = env_actions
-        else:
-            actions[:, i, 1] = env_actions
-
-    def _finish_episode(self, arena: int, info: dict[str, Any]) -> None:
+    def _finish_episode(self, arena: int, info: dict[str, Any], truncated: bool) -> None:
         length = int(info["episode_length"][arena])
         chase = self._chase_steps[arena] / length
         self._chase_steps[arena] = 0.0
+        trace = None
+        if self._traces is not None:
+            trace = self._traces.finish(arena, truncated, self.env.core.world.positions[arena])
         if self.episodes_done >= self.config.episodes:
             return  # arenas finishing on the last step beyond the budget are not counted
         self.episodes_done += 1
@@ -211,5 +271,12 @@ class Trainer:
             chase_fraction={a: float(c) for a, c in zip(self.names[:-1], chase, strict=True)},
             extra=extra,
         )
+        if self.recorder is not None and trace is not None:
+            if self.episodes_done == 1 or self.episodes_done % self.record_every == 0:
+                self.recorder.log_episode(self.episodes_done, trace)
+            metrics = {f"return/{a}": r for a, r in record.returns.items()}
+            metrics.update({"length": float(length), "captured": float(record.captured), **extra})
+            metrics.update({f"chase_fraction/{a}": f for a, f in record.chase_fraction.items()})
+            self.recorder.log_metrics(self.episodes_done, metrics)
         if self.on_episode is not None:
             self.on_episode(record)

@@ -21,6 +21,15 @@ from pursuit_bench.core import PursuitCore
 from pursuit_bench.world import Backend
 
 
+def put_actions(actions: np.ndarray, agent: int, env_actions: np.ndarray) -> None:
+    """Write one agent's env actions, (B, 2) ``(mode, direction)`` or (B,) directions, into a
+    batch of actions (B, n_agents, 2)."""
+    if env_actions.ndim == 2:
+        actions[:, agent] = env_actions
+    else:
+        actions[:, agent, 1] = env_actions
+
+
 class VectorPursuitEnv:
     """``num_envs`` arenas of one condition, stepped together.
 
@@ -33,7 +42,9 @@ class VectorPursuitEnv:
     ``step(actions)`` takes integers of shape (B, n_agents, 2): ``(mode, direction)`` per agent
     (the prey's mode is ignored) and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
     (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
-    with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``captured`` (B,),
+    with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
+    float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
+    (B, n_predators),
     ``left_area`` (B, n_agents), ``episode_return`` (B, n_agents) and ``episode_length`` (B,)
     of the episodes that ended.
     """
@@ -76,7 +87,9 @@ class VectorPursuitEnv:
         info: dict[str, Any] = {
             "done": done,
             "final_observation": result.observations,
+            "positions": self.core.world.positions.copy(),
             "captured": result.contacts.prey.any(axis=1),
+            "touching_prey": result.contacts.prey,
             "left_area": result.contacts.wall,
             "episode_return": self._returns.copy(),
             "episode_length": self.core.steps.copy(),

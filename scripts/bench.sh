@@ -9,3 +9,4 @@ python3 -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "needs P
 .venv-bench/bin/python -m pip install -q --disable-pip-version-check -e ".[bench]"
 .venv-bench/bin/python benchmarks/bench_env.py "$@"
 .venv-bench/bin/python benchmarks/bench_train.py
+.venv-bench/bin/python benchmarks/bench_recording.py

@@ -34,15 +34,17 @@ def observations(n: int = 32, agents: int = 2) -> np.ndarray:
 def test_agent_kinds_map_choices_to_env_actions() -> None:
     obs = observations()[:, 0]
     hierarchical = HierarchicalPredator("predator_0", DQNLearner(10, 2, QUICK))
-    choices, actions = hierarchical.decide(obs, explore=False)
+    choices, actions, q, v = hierarchical.decide(obs, explore=False)
     assert set(np.unique(choices)) <= {0, 1}
     np.testing.assert_array_equal(actions[:, 0], choices)  # the network picks the mode ...
     np.testing.assert_array_equal(actions[:, 1], parallel_navigation(obs, choices))  # ... the rule the direction
+    np.testing.assert_array_equal(choices, q.argmax(axis=1))
+    np.testing.assert_allclose(q.mean(axis=1), v, atol=1e-6)
     flat = FlatPredator("predator_0", DQNLearner(10, 24, QUICK))
-    choices, actions = flat.decide(obs, explore=True, epsilon=1.0)
+    choices, actions, *_ = flat.decide(obs, explore=True, epsilon=1.0)
     np.testing.assert_array_equal(actions[:, 0] * 12 + actions[:, 1], choices)
     prey = Prey("prey_0", DQNLearner(10, 12, QUICK))
-    choices, actions = prey.decide(obs, explore=False)
+    choices, actions, *_ = prey.decide(obs, explore=False)
     np.testing.assert_array_equal(actions, choices)
     assert isinstance(prey.act(obs[0]), (int, np.integer))
     with pytest.raises(ValueError, match="2 actions"):

@@ -4,6 +4,7 @@ import hashlib
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import gymnasium
 import numpy as np
@@ -57,7 +58,8 @@ def test_same_seed_same_1000_steps_in_two_envs_and_two_processes() -> None:
     here = rollout_digest("3p-high-shared", 7, 1000)
     assert here == rollout_digest("3p-high-shared", 7, 1000)
     code = "from tests.test_env_api import rollout_digest; print(rollout_digest('3p-high-shared', 7, 1000))"
-    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    root = Path(__file__).resolve().parent.parent
+    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=root)
     assert other.stdout.strip() == here
     assert here != rollout_digest("3p-high-shared", 8, 1000)
 

@@ -74,19 +74,29 @@ class DQNLearner:
     def beta(self) -> float:
         return self.config.beta(self.steps)
 
+    def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Q-values (M, B, A) and V(s) (M, B) of the online network for observations (M, B, n_obs)."""
+        with torch.no_grad():
+            _, value, advantage = self.online.streams(torch.as_tensor(obs, dtype=torch.float32))
+            q = value + advantage - advantage.mean(dim=-1, keepdim=True)
+        return q.numpy(), value[..., 0].numpy()
+
     def q_values(self, obs: np.ndarray) -> np.ndarray:
         """Q-values (M, B, A) for observations (M, B, n_obs)."""
-        with torch.no_grad():
-            return self.online(torch.as_tensor(obs, dtype=torch.float32)).numpy()
+        return self.evaluate(obs)[0]
 
-    def act(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
-        """Actions (M, B): greedy, or ε-greedy when ``explore`` (ε from the schedule unless
-        ``epsilon`` is given)."""
-        actions = self.q_values(obs).argmax(axis=-1)
+    def choose(self, q_values: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
+        """Actions (M, B) from Q-values: greedy, or ε-greedy when ``explore`` (ε from the schedule
+        unless ``epsilon`` is given)."""
+        actions = q_values.argmax(axis=-1)
         if explore:
             random = self.rng.random(actions.shape) < (self.epsilon if epsilon is None else epsilon)
             actions = np.where(random, self.rng.integers(0, self.n_actions, size=actions.shape), actions)
         return actions
+
+    def act(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
+        """Actions (M, B) for observations (M, B, n_obs); see :meth:`choose`."""
+        return self.choose(self.q_values(obs), explore=explore, epsilon=epsilon)
 
     def store(
         self, obs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, next_obs: np.ndarray, terminated: np.ndarray

@@ -41,15 +41,18 @@ class LearningAgent:
         """Env actions for the network's choices (B,) given the observations (B, n_obs)."""
         raise NotImplementedError
 
-    def decide(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """``(choices, env_actions)`` for observations (B, n_obs): what the replay stores and
-        what the env receives; ε-greedy when ``explore`` (ε from the schedule unless given).
-        This runs the whole learner; a training loop acts for all members at once through
-        :meth:`DQNLearner.act` and :meth:`to_env` instead."""
+    def decide(
+        self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(choices, env_actions, q_values, values)`` for observations (B, n_obs): what the
+        replay stores, what the env receives, and the network's Q (B, A) and V(s) (B,) that
+        led there; ε-greedy when ``explore`` (ε from the schedule unless given). This runs the
+        whole learner; a training loop acts for all members at once instead."""
         stacked = np.zeros((self.learner.members, *obs.shape), dtype=np.float32)
         stacked[self.member] = obs
-        choices = self.learner.act(stacked, explore=explore, epsilon=epsilon)[self.member]
-        return choices, self.to_env(choices, obs)
+        q, v = self.learner.evaluate(stacked)
+        choices = self.learner.choose(q, explore=explore, epsilon=epsilon)[self.member]
+        return choices, self.to_env(choices, obs), q[self.member], v[self.member]
 
     def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> np.ndarray:
         return self.decide(np.asarray(obs, dtype=np.float32), explore=explore, epsilon=epsilon)[1]

@@ -1,0 +1,177 @@
+"""The command line, run for real on tiny budgets."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from pursuit_bench.cli.main import main
+
+TINY = [
+    "--episodes",
+    "12",
+    "--num-envs",
+    "4",
+    "--learning-starts",
+    "32",
+    "--batch-size",
+    "16",
+    "--checkpoint-every",
+    "5",
+]
+
+
+def run_cli(*args: str) -> tuple[int, str]:
+    result = CliRunner().invoke(main, list(args))
+    return result.exit_code, result.output
+
+
+def train_tiny(out: Path, *extra: str) -> None:
+    code, output = run_cli("train", "--condition", "2p-high-shared", "--out", str(out), *TINY, *extra)
+    assert code == 0, output
+
+
+def test_conditions_lists_all_ten() -> None:
+    code, output = run_cli("conditions")
+    assert code == 0 and len(output.strip().splitlines()) == 11 and "3p-high-individual" in output
+
+
+def test_train_then_eval_writes_the_run_folder(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    train_tiny(out, "--record-every", "3")
+    for name in ("config.json", "metrics.jsonl", "checkpoint.pt", "train.rrd"):
+        assert (out / name).is_file(), name
+    config = json.loads((out / "config.json").read_text())
+    assert config["train"]["condition"] == "2p-high-shared" and config["train"]["agent"]["learning_starts"] == 32
+    rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    assert [r["episode"] for r in rows] == list(range(1, 13))
+    assert {"return/predator_0", "return/prey_0", "captured", "length", "epsilon"} <= set(rows[0])
+
+    code, output = run_cli("eval", str(out), "--episodes", "10", "--num-envs", "5")
+    assert code == 0, output
+    result = json.loads((out / "eval.json").read_text())
+    assert (result["condition"], result["episodes"], result["seed"]) == ("2p-high-shared", 10, 12345)
+    assert [p["predator"] for p in result["panels"]] == ["predator_0", "predator_1"]
+    for panel in result["panels"]:
+        assert all(isinstance(panel[k], float) for k in ("hierarchical", "always_chase", "always_stalk"))
+    assert 0.0 <= result["capture_rate"] <= 1.0 and set(result["chase_fraction"]) == {"predator_0", "predator_1"}
+    assert (out / "eval.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (out / "eval.png").stat().st_size > 5000
+    assert (out / "eval.rrd").stat().st_size > 0
+
+
+def test_same_seed_same_eval(tmp_path: Path) -> None:
+    results = []
+    for name in ("a", "b"):
+        train_tiny(tmp_path / name, "--no-record", "--seed", "3")
+        code, output = run_cli("eval", str(tmp_path / name), "--episodes", "8", "--no-record")
+        assert code == 0, output
+        results.append((tmp_path / name / "eval.json").read_text())
+    assert results[0] == results[1]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["train", "--condition", "4p-low"], "'4p-low' is not one of"),
+        (["train", "--episodes", "0"], "0 is not in the range x>=1"),
+        (["train", "--gamma", "1.5"], "gamma=1.5"),
+        (["eval", "nowhere"], "nowhere: no such run folder"),
+        (["view", "missing.rrd"], "missing.rrd: no such recording"),
+    ],
+)
+def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: list[str], message: str) -> None:
+    monkeypatch.chdir(tmp_path)
+    code, output = run_cli(*args)
+    assert code == 2 and message in output and "Traceback" not in output, output
+
+
+def test_bad_run_folders(tmp_path: Path) -> None:
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    code, output = run_cli("eval", str(foreign))
+    assert code == 2 and "not a pursuit-bench run folder" in output
+    code, output = run_cli("train", "--out", str(foreign), *TINY)
+    assert code == 2 and "holds no pursuit-bench run" in output and (foreign / "notes.txt").exists()
+
+    out = tmp_path / "run"
+    train_tiny(out, "--no-record")
+    code, output = run_cli("train", "--condition", "1p-low", "--out", str(out), *TINY)
+    assert code == 2 and "already holds a different run" in output
+    code, output = run_cli("train", "--condition", "2p-high-shared", "--out", str(out), *TINY)
+    assert code == 2 and "already holds this run" in output
+    code, output = run_cli("train", "--condition", "1p-low", "--out", str(out), "--resume", *TINY)
+    assert code == 2 and "another configuration" in output
+
+    checkpoint = out / "checkpoint.pt"
+    good = checkpoint.read_bytes()
+    checkpoint.write_bytes(good[: len(good) // 2])  # truncated
+    code, output = run_cli("eval", str(out))
+    assert code == 2 and "checkpoint.pt: not a readable pursuit-bench checkpoint" in output
+    checkpoint.write_bytes(b"garbage" * 100)  # corrupted
+    code, output = run_cli("eval", str(out))
+    assert code == 2 and "not a readable" in output and len(output.strip().splitlines()) == 1
+
+    code, output = run_cli("train", "--condition", "1p-low", "--out", str(out), "--force", *TINY, "--no-record")
+    assert code == 0, output
+    assert json.loads((out / "config.json").read_text())["train"]["condition"] == "1p-low"
+
+
+def cli_process(*args: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "pursuit_bench.cli.main", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def wait_for(path: Path, timeout: float = 120.0) -> None:
+    start = time.monotonic()
+    while not path.exists():
+        assert time.monotonic() - start < timeout, f"{path} never appeared"
+        time.sleep(0.1)
+
+
+def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    args = ["train", "--condition", "1p-low", "--out", str(out), "--episodes", "400", "--num-envs", "4"]
+    args += ["--learning-starts", "32", "--batch-size", "16", "--checkpoint-every", "20"]
+    process = cli_process(*args)
+    wait_for(out / "checkpoint.pt")
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    resumed = subprocess.run(
+        [sys.executable, "-m", "pursuit_bench.cli.main", *args, "--resume"], capture_output=True, text=True
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming" in resumed.stderr
+    rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    assert [r["episode"] for r in rows] == list(range(1, 401))
+    assert (out / "train.resume1.rrd").exists()
+
+
+def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    process = cli_process(
+        "train", "--condition", "1p-low", "--out", str(out), "--episodes", "100000", "--record-every", "1"
+    )
+    wait_for(out / "metrics.jsonl")
+    time.sleep(3.0)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert "interrupted at episode" in stderr and "Traceback" not in stderr
+    state_rows = (out / "metrics.jsonl").read_text().splitlines()
+    assert len(state_rows) > 0
+    verify = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(out / "train.rrd")], capture_output=True, text=True
+    )
+    assert verify.returncode == 0, verify.stdout + verify.stderr
+    code, output = run_cli("eval", str(out), "--episodes", "4", "--no-record")
+    assert code == 0, output  # the checkpoint written on Ctrl-C loads
