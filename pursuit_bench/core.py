@@ -30,6 +30,8 @@ class StepResult:
     contacts: Contacts
     modes: np.ndarray
     """(B, n_predators) the modes used this step."""
+    distance_to_prey: np.ndarray
+    """(B, n_agents) each predator's distance to the prey, the prey's to its nearest predator."""
 
 
 class PursuitCore:
@@ -71,16 +73,18 @@ class PursuitCore:
 
     def step(self, modes: np.ndarray, directions: np.ndarray) -> StepResult:
         """Advance every arena by one step; ``modes`` (B, n_predators), ``directions`` (B, n_agents)."""
-        acc = task.accelerations(self._los, modes, directions)  # LOS from the last observe()
+        acc = task.accelerations(self._los, modes, directions)  # LOS from the last observation
         contacts = self.world.step(acc)
         self.steps += 1
-        result = task.outcome(self.config, contacts, modes)
-        truncated = (self.steps >= self.config.max_steps) & ~result.terminated
+        world = self.world
+        done = task.finish_step(self.config, contacts, modes, self.steps, world.positions, world.velocities)
+        self._los = done.los
         return StepResult(
-            observations=self.observe(),
-            rewards=result.rewards,
-            terminated=result.terminated,
-            truncated=truncated,
+            observations=done.observations,
+            rewards=done.outcome.rewards,
+            terminated=done.outcome.terminated,
+            truncated=done.truncated,
             contacts=contacts,
             modes=modes,
+            distance_to_prey=done.distance_to_prey,
         )

@@ -13,7 +13,7 @@ from pettingzoo.utils import parallel_to_aec
 
 from pursuit_bench import task
 from pursuit_bench.conditions import TaskConfig, resolve_condition
-from pursuit_bench.core import PursuitCore, StepResult
+from pursuit_bench.core import PursuitCore
 from pursuit_bench.render import draw_arena
 from pursuit_bench.world import Backend
 
@@ -178,6 +178,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         self.agents: list[str] = []
         self._core = PursuitCore(self.config, 1, backend=backend)
         self._n_predators = self.config.n_predators
+        self._agent_set = set(self.possible_agents)
+        self._parse_plan = [(a, i < self._n_predators) for i, a in enumerate(self.possible_agents)]
         bound = _observation_bounds(self.config.n_agents)
         self._observation_spaces = {a: spaces.Box(-bound, bound, dtype=np.float32) for a in self.possible_agents}
         self._action_spaces: dict[str, spaces.Space[Any]] = {
@@ -214,13 +216,22 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         obs = self._core.reset(np.array([0]), [self.np_random], positions)[0]
         self.agents = list(self.possible_agents)
         no = np.zeros((1, self.config.n_agents), dtype=bool)
-        infos = self._infos(no[:, :-1], no, np.full((1, self._n_predators), -1))
+        z = task.as_complex(self._core.world.positions)
+        gaps = np.abs(z[:, :-1] - z[:, -1:])
+        distance = np.concatenate([gaps, gaps.min(axis=1, keepdims=True)], axis=1)
+        infos = self._infos(no[:, :-1], no, np.full((1, self._n_predators), -1), distance)
         return {a: obs[i] for i, a in enumerate(self.agents)}, infos
 
-    def _infos(self, prey_contact: np.ndarray, wall: np.ndarray, modes: np.ndarray) -> dict[str, dict[str, Any]]:
-        z = task.as_complex(self._core.world.positions[0])
-        distances = np.abs(z[:-1] - z[-1]).tolist()
-        touching, walls, mode_list = prey_contact[0].tolist(), wall[0].tolist(), modes[0].tolist()
+    def _infos(
+        self, prey_contact: np.ndarray, wall: np.ndarray, modes: np.ndarray, distance: np.ndarray
+    ) -> dict[str, dict[str, Any]]:
+        """Per-agent infos of arena 0 from (1, …) arrays."""
+        touching, walls, mode_list, distances = (
+            prey_contact[0].tolist(),
+            wall[0].tolist(),
+            modes[0].tolist(),
+            distance[0].tolist(),
+        )
         infos: dict[str, dict[str, Any]] = {
             name: {
                 "captured": touching[i],
@@ -230,7 +241,7 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             }
             for i, name in enumerate(self.possible_agents[:-1])
         }
-        infos["prey_0"] = {"captured": any(touching), "left_area": walls[-1], "distance_to_prey": min(distances)}
+        infos["prey_0"] = {"captured": any(touching), "left_area": walls[-1], "distance_to_prey": distances[-1]}
         return infos
 
     def step(
@@ -238,26 +249,20 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, bool], dict[str, bool], dict[str, dict[str, Any]]]:
         if not self.agents:
             raise ValueError("step() called on a finished episode: call reset() first")
-        unknown = set(actions) - set(self.agents)
-        if unknown:
-            raise ValueError(f"actions for unknown agent(s) {sorted(unknown)}: expected keys {self.agents}")
-        parsed = []
-        for i, agent in enumerate(self.possible_agents):
-            if agent not in actions:
-                raise ValueError(f"missing action for {agent}: every live agent acts each step")
-            parsed.append(parse_action(agent, actions[agent], i < self._n_predators))
+        if actions.keys() != self._agent_set:
+            unknown = sorted(set(actions) - self._agent_set)
+            if unknown:
+                raise ValueError(f"actions for unknown agent(s) {unknown}: expected keys {self.agents}")
+            missing = sorted(self._agent_set - set(actions))
+            raise ValueError(f"missing action for {', '.join(missing)}: every live agent acts each step")
+        parsed = [parse_action(agent, actions[agent], predator) for agent, predator in self._parse_plan]
         modes, directions = np.array(parsed, dtype=np.int64).T[:, None, :]
-        result = self._core.step(modes[:, : self._n_predators], directions)
-        return self._unbatch(result)
-
-    def _unbatch(
-        self, r: StepResult
-    ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, bool], dict[str, bool], dict[str, dict[str, Any]]]:
+        r = self._core.step(modes[:, : self._n_predators], directions)
         agents = self.possible_agents
         terminated, truncated = bool(r.terminated[0]), bool(r.truncated[0])
         obs = dict(zip(agents, r.observations[0], strict=True))
         rewards = dict(zip(agents, r.rewards[0].tolist(), strict=True))
-        infos = self._infos(r.contacts.prey, r.contacts.wall, r.modes)
+        infos = self._infos(r.contacts.prey, r.contacts.wall, r.modes, r.distance_to_prey)
         if terminated or truncated:
             self.agents = []
         return obs, rewards, dict.fromkeys(agents, terminated), dict.fromkeys(agents, truncated), infos

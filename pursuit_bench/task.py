@@ -189,6 +189,93 @@ def _outcome_kernel(wall, prey, modes, chase_cost, shared, walls_end, rewards, t
         terminated[b] = caught or (walls_end and any_wall)
 
 
+@numba.njit(cache=True)
+def _finish_kernel(
+    wall,
+    prey,
+    modes,
+    chase_cost,
+    shared,
+    walls_end,
+    steps,
+    max_steps,
+    z,
+    w,
+    rewards,
+    terminated,
+    truncated,
+    captured,
+    obs,
+    los,
+    distance,
+):
+    _outcome_kernel(wall, prey, modes, chase_cost, shared, walls_end, rewards, terminated, captured)
+    _observe_kernel(z, w, obs, los)
+    n_pred = z.shape[1] - 1
+    for b in range(z.shape[0]):
+        truncated[b] = steps[b] >= max_steps and not terminated[b]
+        nearest = np.inf
+        for i in range(n_pred):
+            distance[b, i] = abs(z[b, i] - z[b, n_pred])
+            nearest = min(nearest, distance[b, i])
+        distance[b, n_pred] = nearest
+
+
+@dataclass
+class Finish:
+    """Everything a step ends with, per arena: :class:`Outcome`, truncation, observations."""
+
+    outcome: Outcome
+    truncated: np.ndarray
+    """(B,) bool: the step limit was reached without termination."""
+    observations: np.ndarray
+    """(B, n_agents, 6n-2) float32."""
+    los: np.ndarray
+    """(B, n_agents, 2) unit LOS at the new positions."""
+    distance_to_prey: np.ndarray
+    """(B, n_agents): each predator's distance to the prey; the prey's to its nearest predator."""
+
+
+def finish_step(
+    config: TaskConfig,
+    contacts: Contacts,
+    modes: np.ndarray,
+    steps: np.ndarray,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+) -> Finish:
+    """:func:`outcome`, truncation after ``config.max_steps`` and :func:`observe`, in one call."""
+    batch, n, _ = positions.shape
+    out = Finish(
+        outcome=Outcome(rewards=np.empty((batch, n)), terminated=np.empty(batch, bool), captured=np.empty(batch, bool)),
+        truncated=np.empty(batch, dtype=bool),
+        observations=np.empty((batch, n, obs_size(n)), dtype=np.float32),
+        los=np.empty((batch, n), dtype=np.complex128),
+        distance_to_prey=np.empty((batch, n)),
+    )
+    _finish_kernel(
+        contacts.wall,
+        contacts.prey,
+        modes,
+        float(config.chase_cost),
+        config.reward_sharing == "shared",
+        config.wall_rule == "terminate",
+        steps,
+        config.max_steps,
+        as_complex(positions),
+        as_complex(velocities),
+        out.outcome.rewards,
+        out.outcome.terminated,
+        out.truncated,
+        out.outcome.captured,
+        out.observations,
+        out.los,
+        out.distance_to_prey,
+    )
+    out.los = as_xy(out.los)
+    return out
+
+
 def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcome:
     """SPEC's reward table; events in one step add up. A capture gives +1 to every predator
     (``shared``) or to each predator touching the prey (``individual``) and -1 to the prey;

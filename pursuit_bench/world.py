@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
+import numba
 import numpy as np
 import pymunk
 import pymunk.batch
@@ -58,6 +59,7 @@ HASH_CELL = 0.75
 HASH_BUCKETS_PER_SHAPE = 10
 
 Backend = Literal["pymunk", "numpy"]
+_POSITION_VELOCITY = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
 
 
 @dataclass
@@ -86,23 +88,35 @@ def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.
     return (1.0 - DAMPING) * velocities + accelerations * DT
 
 
+@numba.njit(cache=True)
+def _touch_walls_kernel(positions, velocities, limit, tolerance, contain, wall, moved):
+    for b in range(positions.shape[0]):
+        moved[b] = False
+        for i in range(positions.shape[1]):
+            touching = False
+            for d in range(2):
+                x = positions[b, i, d]
+                if abs(x) >= limit - tolerance:
+                    touching = True
+                if abs(x) > limit:
+                    if contain and velocities[b, i, d] * x > 0:
+                        velocities[b, i, d] = 0.0
+                    positions[b, i, d] = limit if x > 0 else -limit
+                    moved[b] = True
+            wall[b, i] = touching
+
+
 def touch_walls(
     positions: np.ndarray, velocities: np.ndarray, limit: float, wall_rule: WallRule
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Which disks touch or cross a wall (``|x|`` or ``|y| >= limit - CONTACT_TOLERANCE``), (B, n)
-    bool, and which
-    arenas had a disk put back, (B,) bool. Disks that cross are put back touching the wall, in
-    place; under ``contain`` they also lose their outward velocity (a perfectly inelastic wall)."""
-    reach = np.abs(positions)
-    touching = reach >= limit - CONTACT_TOLERANCE
-    wall = touching[..., 0] | touching[..., 1]
-    if not wall.any():
-        return wall, np.zeros(len(positions), dtype=bool)
-    outside = reach > limit
-    if wall_rule == "contain":
-        velocities[outside & (velocities * positions > 0)] = 0.0
-    np.clip(positions, -limit, limit, out=positions)
-    return wall, outside.any(axis=(1, 2))
+    """Which disks touch or cross a wall (``|x|`` or ``|y| >= limit - CONTACT_TOLERANCE``),
+    (B, n) bool, and which arenas had a disk put back, (B,) bool. Disks that cross are put back
+    touching the wall, in place; under ``contain`` they also lose their outward velocity (a
+    perfectly inelastic wall)."""
+    wall = np.empty(positions.shape[:2], dtype=bool)
+    moved = np.empty(positions.shape[0], dtype=bool)
+    _touch_walls_kernel(positions, velocities, limit, CONTACT_TOLERANCE, wall_rule == "contain", wall, moved)
+    return wall, moved
 
 
 def _prey_overlap(positions: np.ndarray) -> np.ndarray:
@@ -247,8 +261,7 @@ class PymunkWorld:
 
     def _read(self) -> None:
         self._read_buffer.clear()
-        fields = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
-        pymunk.batch.get_space_bodies(self.space, fields, self._read_buffer)
+        pymunk.batch.get_space_bodies(self.space, _POSITION_VELOCITY, self._read_buffer)
         state = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
         shape = (self.num_arenas, self.n_agents, 2)
         positions = state[:, :2] - self._offsets_per_body if self._offset else state[:, :2].copy()
@@ -264,8 +277,7 @@ class PymunkWorld:
         flat = self._state
         flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
         flat[:-1, 2:] = self.velocities.reshape(-1, 2)
-        fields = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
-        pymunk.batch.set_space_bodies(self.space, fields, self._state_buffer)
+        pymunk.batch.set_space_bodies(self.space, _POSITION_VELOCITY, self._state_buffer)
 
     def step(self, accelerations: np.ndarray) -> Contacts:
         self._wall.fill(False)
