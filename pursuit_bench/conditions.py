@@ -107,15 +107,3 @@ def resolve_condition(condition: str | None = None, **options: object) -> TaskCo
         reward_sharing=base.reward_sharing,
         **given,  # type: ignore[arg-type]
     )
-
-
-def condition_name(config: TaskConfig) -> str | None:
-    """The paper's name for a config's condition, or None if it is not one of the ten."""
-    for name, c in CONDITIONS.items():
-        if (c.n_predators, c.chase_cost, c.reward_sharing) == (
-            config.n_predators,
-            config.chase_cost,
-            config.reward_sharing,
-        ):
-            return name
-    return None

@@ -8,7 +8,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from pursuit_bench.agents.kinds import HierarchicalPredator
+from pursuit_bench.agents.kinds import HierarchicalPredator, ScriptedAgent
+from pursuit_bench.policies import AlwaysChase, AlwaysStalk
 from pursuit_bench.recording import EpisodeTraces, Recorder
 from pursuit_bench.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.world import Backend
@@ -119,9 +120,6 @@ def evaluate_agents(
     the other agents fixed; every variant plays the same seeds. Also the capture rate, time to
     capture, distance travelled and fraction of steps in chase, as trained. The episodes as
     trained go into ``recorder``."""
-    from pursuit_bench.agents.kinds import ScriptedAgent
-    from pursuit_bench.policies import AlwaysChase, AlwaysStalk
-
     names = list(agents)
     predators, prey = names[:-1], names[-1]
     epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}

@@ -16,13 +16,16 @@ Entities (``recordings/README.md`` says the same for users):
 - ``training/…``: per-episode training metrics on the ``episode`` timeline.
 - ``config``: the condition and the resolved configuration (static text).
 
-Recording is opt-in: a loop without a :class:`Recorder` makes no Rerun call at all.
+Recording is opt-in: a loop without a :class:`Recorder` makes no Rerun call at all. The
+PettingZoo env records through the :class:`RecordEpisodes` wrapper.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,6 +34,7 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 import rerun.blueprint as rrb
+from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from pursuit_bench.render import PREDATOR_RGB, PREY_RGB
 from pursuit_bench.task import MODE_NAMES
@@ -387,3 +391,55 @@ class Recorder:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class RecordEpisodes(BaseParallelWrapper):
+    """Records every episode of a :class:`~pursuit_bench.env.PursuitParallelEnv` (opt-in)::
+
+        env = RecordEpisodes(pursuit_bench.parallel_env("2p-high-shared"))
+        ...  # reset and step as usual
+        env.close()  # finishes the file
+
+    Args:
+        env: the env to record.
+        path: the ``.rrd`` file; by default a new file in ``recordings/``.
+    """
+
+    def __init__(self, env: Any, path: str | os.PathLike[str] | None = None) -> None:
+        super().__init__(env)
+        base = env.unwrapped
+        name = base.condition or "pursuit"
+        self.path = Path(path) if path is not None else RECORDINGS_DIR / f"{name}-{time.strftime('%Y%m%d-%H%M%S')}.rrd"
+        described = {"condition": name, **dataclasses.asdict(base.config)}
+        self.recorder = Recorder(self.path, list(base.possible_agents), described, episodes_per_send=1)
+        self._base = base
+        self._episodes = 0
+        self._traces: EpisodeTraces | None = None
+
+    def reset(self, seed: int | None = None, options: dict[str, Any] | None = None) -> Any:
+        result = self.env.reset(seed=seed, options=options)
+        self._traces = EpisodeTraces(self._base._core.world.positions, self._base.config.max_steps)
+        return result
+
+    def step(self, actions: dict[str, Any]) -> Any:
+        obs, rewards, terminated, truncated, infos = self.env.step(actions)
+        if self._traces is not None:
+            names = self._base.possible_agents
+            predators = names[:-1]
+            self._traces.add(
+                self._base._core.world.positions.copy(),
+                np.array([[infos[a]["mode"] for a in predators]]),
+                np.array([[rewards[a] for a in names]]),
+                np.array([[infos[a]["left_area"] for a in names]]),
+                np.array([[infos[a]["captured"] for a in predators]]),
+            )
+            if not self._base.agents:  # the episode ended
+                self._episodes += 1
+                trace = self._traces.finish(0, bool(truncated[names[0]]), self._base._core.world.positions[0])
+                self.recorder.log_episode(self._episodes, trace)
+                self._traces = None
+        return obs, rewards, terminated, truncated, infos
+
+    def close(self) -> None:
+        self.recorder.close()
+        self.env.close()

@@ -14,6 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
 from pursuit_bench.agents.config import QUICK, AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner
 from pursuit_bench.agents.kinds import KINDS, LearningAgent, ScriptedAgent
@@ -170,8 +171,6 @@ class Trainer:
 
     def state_dict(self) -> dict[str, Any]:
         """Everything a resumed run needs: every learning agent and the counters."""
-        from pursuit_bench.agents.checkpoint import agent_state
-
         return {
             "episodes_done": self.episodes_done,
             "env_steps": self.env_steps,
@@ -186,8 +185,6 @@ class Trainer:
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore from :meth:`state_dict`. Episodes under way when it was taken are not resumed:
         every arena starts afresh, from a seed derived from the run's seed and the episode count."""
-        from pursuit_bench.agents.checkpoint import load_agent_state
-
         learning = {a.name: a for a in self.agents.values() if isinstance(a, LearningAgent)}
         if set(state["agents"]) != set(learning):
             raise ValueError(f"checkpoint holds agents {sorted(state['agents'])}, this run has {sorted(learning)}")

@@ -90,6 +90,15 @@ def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: l
     assert code == 2 and message in output and "Traceback" not in output, output
 
 
+def test_view_without_a_display_says_what_to_do(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    recording = tmp_path / "x.rrd"
+    recording.write_bytes(b"")
+    code, output = run_cli("view", str(recording))
+    assert code == 1 and "no display" in output and "rerun --web-viewer" in output and "Traceback" not in output
+
+
 def test_bad_run_folders(tmp_path: Path) -> None:
     foreign = tmp_path / "foreign"
     foreign.mkdir()

@@ -5,6 +5,7 @@ import pytest
 
 from pursuit_bench import task
 from pursuit_bench.navigation import APPROACH_DIRECTIONS, constant_bearing_angle, parallel_navigation, pure_pursuit
+from pursuit_bench.policies import PurePursuitPredator
 from pursuit_bench.world import DAMPING, DT, make_world
 
 CASES = [  # predator start, prey start, prey velocity
@@ -78,6 +79,7 @@ def test_rule_on_hand_cases() -> None:
     ks = parallel_navigation(many, rng.integers(0, 2, size=(5, 7)))
     assert ks.shape == (5, 7) and np.isin(ks, APPROACH_DIRECTIONS).all()
     assert (pure_pursuit(many) == 0).all()
+    np.testing.assert_array_equal(PurePursuitPredator(task.STALK).act(many[0, 0]), [task.STALK, 0])
 
 
 def test_constant_bearing_formula() -> None:

@@ -15,7 +15,7 @@ from pursuit_bench.agents import QUICK, DQNLearner, HierarchicalPredator, Script
 from pursuit_bench.evaluate import run_episodes
 from pursuit_bench.navigation import parallel_navigation
 from pursuit_bench.policies import FleeingPrey
-from pursuit_bench.recording import Recorder
+from pursuit_bench.recording import RecordEpisodes, Recorder
 from pursuit_bench.train import TrainConfig, Trainer
 
 NAMES = ["predator_0", "predator_1", "prey_0"]
@@ -133,3 +133,19 @@ def test_no_rerun_call_when_recording_is_off(monkeypatch) -> None:
     monkeypatch.setattr("pursuit_bench.recording.rr", rerun)
     Trainer(TrainConfig(condition="1p-low", episodes=5, num_envs=2)).run()
     run_episodes("1p-low", {"predator_0": CloseChaser(), "prey_0": ScriptedAgent("prey_0", FleeingPrey())}, 3, seed=0)
+
+
+def test_the_env_wrapper_records_every_episode(tmp_path: Path) -> None:
+    env = RecordEpisodes(parallel_env("1p-low", max_steps=40), tmp_path / "env.rrd")
+    states = []
+    for episode in range(2):
+        env.reset(seed=episode)
+        states.append([env.unwrapped.state().reshape(2, 4)[:, :2].copy()])
+        while env.agents:
+            env.step({"predator_0": np.array([0, 1]), "prey_0": 6})
+            states[-1].append(env.unwrapped.state().reshape(2, 4)[:, :2].copy())
+    env.close()
+    rows = read_back(tmp_path / "env.rrd")
+    for k, expected in enumerate(states, start=1):
+        got = np.array([v["Points2D:positions"][0] for e, s, v in rows["/arena/agents/prey_0"] if e == k])
+        np.testing.assert_allclose(got, np.array(expected)[:, 1], atol=1e-6)
