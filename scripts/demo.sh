@@ -4,6 +4,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install.sh test
-.venv/bin/pursuit-bench train --condition 1p-high --episodes 300 --out runs/demo --force
-.venv/bin/pursuit-bench eval runs/demo --episodes 300
+.venv/bin/pursuit-bench train --condition 1p-high --episodes 1000 --out runs/demo --force
+.venv/bin/pursuit-bench eval runs/demo --episodes 1000
 echo "open the recordings with: .venv/bin/pursuit-bench view runs/demo/eval.rrd (or runs/demo/train.rrd)"
