@@ -61,11 +61,6 @@ class PursuitCore:
         obs, self._los[arenas] = task.observe(starts, np.zeros_like(starts))
         return obs
 
-    def observe(self) -> np.ndarray:
-        """(B, n_agents, 6n-2) float32 observations at the current state."""
-        obs, self._los = task.observe(self.world.positions, self.world.velocities)
-        return obs
-
     def state(self) -> np.ndarray:
         """(B, 4 n_agents) float32 global state: ``[x, y, vx, vy]`` per agent, world frame."""
         w = self.world

@@ -36,9 +36,10 @@ START_HALF_SIZE = 0.5
 ROTATIONS = np.exp(-1j * DIRECTION_STEP * np.arange(N_DIRECTIONS))
 
 # A 2-D vector is one complex number x + iy here: rotating into an agent's LOS frame is a
-# multiplication by the conjugate of its unit LOS. The per-step work is three small kernels
-# compiled by numba, plain loops over arenas and agents: one implementation for every batch
-# size, fast at B = 1 (the single env) where numpy's per-call overhead would dominate.
+# multiplication by the conjugate of its unit LOS. The per-step work is two small kernels
+# compiled by numba (accelerations; then rewards, truncation and observations), plain loops
+# over arenas and agents: one implementation for every batch size, fast at B = 1 (the single
+# env) where numpy's per-call overhead would dominate.
 
 
 def as_complex(xy: np.ndarray) -> np.ndarray:

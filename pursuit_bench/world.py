@@ -19,6 +19,8 @@ Two backends share this contract and the interface ``reset(arenas, positions)`` 
   exactly ``v' · DT``. pymunk owns the walls (thick static segments) and the contacts.
 - :class:`NumpyWorld`: the same arithmetic in vectorized numpy, with contacts from distances.
 
+Both put disks back at the walls with one small compiled kernel (:func:`touch_walls`).
+
 Contacts reported by ``step`` are those at the end of the step. Whatever the speed, no disk ends a
 step outside its arena: a disk that touches or crosses a wall is put back touching it.
 """
