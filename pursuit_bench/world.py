@@ -187,7 +187,6 @@ class PymunkWorld:
         self.n_agents = n_agents
         self.wall_rule = wall_rule
         self.limit = half_size - RADIUS
-        self._wall = np.zeros((num_arenas, n_agents), dtype=bool)
         self._prey = np.zeros((num_arenas, n_agents - 1), dtype=bool)
 
         space = pymunk.Space()
@@ -221,8 +220,6 @@ class PymunkWorld:
                 self._index[disk] = (arena, agent)
         space.use_spatial_hash(HASH_CELL, HASH_BUCKETS_PER_SHAPE * len(space.shapes))
         space.on_collision(_PREDATOR, _PREY, pre_solve=self._on_capture)
-        space.on_collision(_PREDATOR, _WALL, pre_solve=self._on_wall)
-        space.on_collision(_PREY, _WALL, pre_solve=self._on_wall)
 
         self._offsets_per_body = np.repeat(self.offsets, n_agents, axis=0)
         self._offset = bool(self.offsets.any())  # a single arena sits at the origin
@@ -234,6 +231,7 @@ class PymunkWorld:
         self._state = np.zeros((self._bodies + 1, 4))  # px, py, vx, vy per body
         self._state_buffer = pymunk.batch.Buffer()
         self._state_buffer.set_float_buf(self._state.reshape(-1))
+        self._moved = False  # disks moved by us since pymunk last stepped: write their positions
         self._velocity = np.zeros((self._bodies + 1, 2))  # vx, vy per body
         self._velocity_buffer = pymunk.batch.Buffer()
         self._velocity_buffer.set_float_buf(self._velocity.reshape(-1))
@@ -247,6 +245,7 @@ class PymunkWorld:
         for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1], strict=False):
             wall = pymunk.Segment(self.space.static_body, (ox + ax, oy + ay), (ox + bx, oy + by), t)
             wall.collision_type = _WALL
+            wall.sensor = self.wall_rule == "terminate"  # the episode ends there: never pushed back
             wall.friction = 0.0
             wall.elasticity = 0.0
             self.space.add(wall)
@@ -255,11 +254,6 @@ class PymunkWorld:
         arena, agent = self._index[arbiter.shapes[0]]
         self._prey[arena, agent] = True
         arbiter.process_collision = False
-
-    def _on_wall(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        arena, agent = self._index[arbiter.shapes[0]]
-        self._wall[arena, agent] = True
-        arbiter.process_collision = self.wall_rule == "contain"
 
     def _read(self) -> None:
         self._read_buffer.clear()
@@ -273,29 +267,34 @@ class PymunkWorld:
     def reset(self, arenas: np.ndarray, positions: np.ndarray) -> None:
         self.positions[arenas] = positions
         self.velocities[arenas] = 0.0
-        self._write_all()
+        self._moved = True  # pymunk learns the new positions with the next step's velocities
 
-    def _write_all(self) -> None:
-        flat = self._state
-        flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
-        flat[:-1, 2:] = self.velocities.reshape(-1, 2)
-        pymunk.batch.set_space_bodies(self.space, _POSITION_VELOCITY, self._state_buffer)
+    def _write(self, velocities: np.ndarray) -> None:
+        """Give pymunk the velocities for this step, and the positions too if we moved disks
+        (a reset, or putting them back at a wall) since it last stepped."""
+        if self._moved:
+            flat = self._state
+            flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
+            flat[:-1, 2:] = velocities.reshape(-1, 2)
+            pymunk.batch.set_space_bodies(self.space, _POSITION_VELOCITY, self._state_buffer)
+            self._moved = False
+        else:
+            self._velocity[:-1] = velocities.reshape(-1, 2)
+            pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._velocity_buffer)
 
     def step(self, accelerations: np.ndarray) -> Contacts:
-        self._wall.fill(False)
         self._prey.fill(False)
-        self._velocity[:-1] = integrate_velocity(self.velocities, accelerations).reshape(-1, 2)
-        pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._velocity_buffer)
+        self._write(integrate_velocity(self.velocities, accelerations))
         self.space.step(DT)
         self._read()
         wall, moved = touch_walls(self.positions, self.velocities, self.limit, self.wall_rule)
         prey = self._prey.copy()
         if moved.any():
-            self._write_all()
+            self._moved = True
             # pymunk saw those arenas before their disks were put back: decide their captures
             # on the positions the step ends with
             prey[moved] = _prey_overlap(self.positions[moved])
-        return Contacts(wall=wall | self._wall, prey=prey)
+        return Contacts(wall=wall, prey=prey)
 
 
 def make_world(

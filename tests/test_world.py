@@ -54,8 +54,6 @@ def test_disk_driven_at_a_wall_at_chase_speed_never_leaves(backend: str, wall_ru
     a[0, 0] = np.array(direction) * ACCEL_CHASE
     # start at terminal speed so the disk crosses the last stretch as fast as it ever can
     world.velocities[0, 0] = np.array(direction) * 1.44
-    if backend == "pymunk":
-        world._write_all()  # type: ignore[attr-defined]
     touched = []
     for _ in range(40):
         contacts = world.step(a)
@@ -118,8 +116,6 @@ def test_capture_is_decided_after_a_disk_is_put_back(backend: str, wall_rule: st
     world = make_world(backend, 1, 2, wall_rule=wall_rule)
     world.reset(np.array([0]), np.array([[[0.0, 0.853], [0.0, 0.94]]]))
     world.velocities[0, 1] = (0.0, 0.2)  # v' = 0.15, p' = 0.955 without the wall
-    if backend == "pymunk":
-        world._write_all()  # type: ignore[attr-defined]
     contacts = world.step(np.zeros((1, 2, 2)))
     assert world.positions[0, 1, 1] == pytest.approx(1 - RADIUS)
     assert contacts.wall[0, 1] and contacts.prey[0, 0]
