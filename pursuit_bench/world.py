@@ -170,9 +170,10 @@ class PymunkWorld:
     Arenas sit on a square grid, ``2 (half_size + WALL_THICKNESS)`` apart, so they never touch.
     Predators share a shape-filter group and so pass through each other; predator–prey contacts
     are reported by a collision callback and never pushed apart (a capture ends the episode).
-    Wall contacts are reported too; under ``terminate`` they are not resolved (the episode ends
-    and the disk is put back touching the wall), under ``contain`` pymunk resolves them as
-    perfectly inelastic, frictionless contacts.
+    Under ``contain`` pymunk's solver stops disks at the walls (perfectly inelastic,
+    frictionless); under ``terminate`` the walls are sensors (the episode ends there, nothing is
+    pushed back). Whether a disk touches a wall is decided on its position (:func:`touch_walls`),
+    which also catches every contact pymunk would report.
     """
 
     def __init__(
