@@ -222,6 +222,14 @@ def _finish_kernel(
         distance[b, n_pred] = nearest
 
 
+def _reward_rules(
+    config: TaskConfig, contacts: Contacts, modes: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool, bool]:
+    """The reward-table kernel's inputs: contacts, modes and the condition's rules."""
+    shared, walls_end = config.reward_sharing == "shared", config.wall_rule == "terminate"
+    return contacts.wall, contacts.prey, modes, float(config.chase_cost), shared, walls_end
+
+
 @dataclass
 class Finish:
     """Everything a step ends with, per arena: :class:`Outcome`, truncation, observations."""
@@ -255,12 +263,7 @@ def finish_step(
         distance_to_prey=np.empty((batch, n)),
     )
     _finish_kernel(
-        contacts.wall,
-        contacts.prey,
-        modes,
-        float(config.chase_cost),
-        config.reward_sharing == "shared",
-        config.wall_rule == "terminate",
+        *_reward_rules(config, contacts, modes),
         steps,
         config.max_steps,
         as_complex(positions),
@@ -286,17 +289,7 @@ def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcom
     rewards = np.empty((batch, n))
     terminated = np.empty(batch, dtype=bool)
     captured = np.empty(batch, dtype=bool)
-    _outcome_kernel(
-        contacts.wall,
-        contacts.prey,
-        modes,
-        float(config.chase_cost),
-        config.reward_sharing == "shared",
-        config.wall_rule == "terminate",
-        rewards,
-        terminated,
-        captured,
-    )
+    _outcome_kernel(*_reward_rules(config, contacts, modes), rewards, terminated, captured)
     return Outcome(rewards=rewards, terminated=terminated, captured=captured)
 
 
