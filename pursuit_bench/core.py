@@ -14,6 +14,9 @@ from pursuit_bench import task
 from pursuit_bench.conditions import TaskConfig
 from pursuit_bench.world import Backend, Contacts, make_world
 
+#: Start layouts an arena draws from its generator at a time (see ``PursuitCore._draw_starts``).
+STARTS_AHEAD = 16
+
 
 @dataclass
 class StepResult:
@@ -45,6 +48,8 @@ class PursuitCore:
         self.world = make_world(backend, num_arenas, config.n_agents, wall_rule=config.wall_rule)
         self.steps = np.zeros(num_arenas, dtype=np.int64)
         self._los = np.zeros((num_arenas, config.n_agents, 2))  # LOS at the current positions
+        # start layouts drawn ahead, per arena, with the generator they came from
+        self._starts: dict[int, tuple[np.random.Generator, list[np.ndarray]]] = {}
 
     def reset(
         self, arenas: np.ndarray, rngs: list[np.random.Generator], positions: np.ndarray | None = None
@@ -53,13 +58,26 @@ class PursuitCore:
         (``positions`` (len(arenas), n_agents, 2), checked by :func:`task.check_positions`).
         Returns the observations of those arenas (len(arenas), n_agents, 6n-2)."""
         if positions is None:
-            starts = task.sample_starts(rngs, self.config.n_agents)
+            starts = self._draw_starts(arenas, rngs)
         else:
             starts = task.check_positions(positions, (len(arenas), self.config.n_agents, 2))
         self.world.reset(arenas, starts)
         self.steps[arenas] = 0
         obs, self._los[arenas] = task.observe(starts, np.zeros_like(starts))
         return obs
+
+    def _draw_starts(self, arenas: np.ndarray, rngs: list[np.random.Generator]) -> np.ndarray:
+        """The next start layout of each arena. Each arena draws ``STARTS_AHEAD`` layouts at a
+        time from its own generator (one call instead of one per episode) and uses them in
+        order; a new generator (a reseed) discards what the old one drew."""
+        starts = np.empty((len(arenas), self.config.n_agents, 2))
+        for k, (arena, rng) in enumerate(zip(arenas.tolist(), rngs, strict=True)):
+            owner, ahead = self._starts.get(arena, (None, []))
+            if owner is not rng or not ahead:
+                ahead = list(task.start_layouts(rng, self.config.n_agents, STARTS_AHEAD)[::-1])
+                self._starts[arena] = (rng, ahead)
+            starts[k] = ahead.pop()
+        return starts
 
     def state(self) -> np.ndarray:
         """(B, 4 n_agents) float32 global state: ``[x, y, vx, vy]`` per agent, world frame."""

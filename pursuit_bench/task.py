@@ -293,35 +293,22 @@ def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcom
     return Outcome(rewards=rewards, terminated=terminated, captured=captured)
 
 
-#: Candidate layouts drawn per arena at a time when sampling start states (~19 % of 4-disk
-#: layouts overlap, so four nearly always include a valid one).
-START_CANDIDATES = 4
-
-
-def sample_starts(rngs: list[np.random.Generator], n_agents: int) -> np.ndarray:
-    """(len(rngs), n_agents, 2) start positions, uniform in ``[-0.5, 0.5]²``, no two disks
-    overlapping: each arena draws ``START_CANDIDATES`` layouts at a time from its own generator
-    and keeps the first in which every disk is apart (redrawing is our addition; the paper
-    does not say). Arenas are checked together; each generator's draws do not depend on the
-    other arenas."""
-    starts = np.empty((len(rngs), n_agents, 2))
-    pending = np.arange(len(rngs))
+def start_layouts(rng: np.random.Generator, n_agents: int, count: int) -> np.ndarray:
+    """Start layouts (k, n_agents, 2), uniform in ``[-0.5, 0.5]²`` (paper 3.1): ``count``
+    layouts drawn at once from ``rng``, those in which two disks overlap dropped (dropping is our
+    addition; the paper does not say), drawn again if none is left."""
     first, second = np.triu_indices(n_agents, 1)
-    shape = (START_CANDIDATES, n_agents, 2)
-    while len(pending):
-        layouts = np.stack([rngs[k].uniform(-START_HALF_SIZE, START_HALF_SIZE, size=shape) for k in pending])
-        gaps = layouts[:, :, first] - layouts[:, :, second]
-        apart = ((gaps * gaps).sum(axis=-1) >= (2 * RADIUS) ** 2).all(axis=-1)  # (arenas, candidates)
-        found = apart.any(axis=1)
-        chosen = apart.argmax(axis=1)
-        starts[pending[found]] = layouts[found, chosen[found]]
-        pending = pending[~found]
-    return starts
+    while True:
+        layouts = rng.uniform(-START_HALF_SIZE, START_HALF_SIZE, size=(count, n_agents, 2))
+        gaps = layouts[:, first] - layouts[:, second]
+        apart = ((gaps * gaps).sum(axis=-1) >= (2 * RADIUS) ** 2).all(axis=-1)
+        if apart.any():
+            return layouts[apart]
 
 
 def sample_start(rng: np.random.Generator, n_agents: int) -> np.ndarray:
-    """(n_agents, 2) start positions for one arena; see :func:`sample_starts`."""
-    return sample_starts([rng], n_agents)[0]
+    """(n_agents, 2) one start layout; see :func:`start_layouts`."""
+    return start_layouts(rng, n_agents, 1)[0]
 
 
 def check_positions(positions: object, shape: tuple[int, ...]) -> np.ndarray:

@@ -64,6 +64,14 @@ def test_same_seed_same_1000_steps_in_two_envs_and_two_processes() -> None:
     assert here != rollout_digest("3p-high-shared", 8, 1000)
 
 
+def test_reseeding_the_same_env_repeats_its_episodes() -> None:
+    env = pursuit_bench.parallel_env("3p-low-shared")
+    first = [env.reset(seed=3)[0]["prey_0"]] + [env.reset()[0]["prey_0"] for _ in range(20)]
+    again = [env.reset(seed=3)[0]["prey_0"]] + [env.reset()[0]["prey_0"] for _ in range(20)]
+    np.testing.assert_array_equal(first, again)
+    assert len({tuple(o[:2]) for o in first}) == 21  # and the starts do differ from episode to episode
+
+
 def test_state_render_and_infos() -> None:
     env = pursuit_bench.parallel_env("2p-low-shared", render_mode="rgb_array")
     _obs, infos = env.reset(seed=3)
