@@ -153,7 +153,7 @@ def main() -> None:
     )
     report("MPE2 simple_tag", 1, mpe2_single(args.single_steps // 3, args.repeats))
     for size in args.sizes:
-        steps = max(20, 40_000 // size)
+        steps = max(20, 100_000 // size)  # long enough for a stable median at every size
         report("pursuit-bench batched (pymunk)", size, ours_batched("pymunk", size, steps, args.repeats))
         report("pursuit-bench batched (numpy)", size, ours_batched("numpy", size, steps, args.repeats))
         report("VMAS simple_tag (cpu)", size, vmas_batched(size, steps, args.repeats))
