@@ -28,6 +28,8 @@ class StepResult:
     """(B, n_agents) float64."""
     terminated: np.ndarray
     """(B,) bool."""
+    captured: np.ndarray
+    """(B,) bool: some predator overlaps the prey."""
     truncated: np.ndarray
     """(B,) bool: the step limit was reached without termination."""
     contacts: Contacts
@@ -96,6 +98,7 @@ class PursuitCore:
             observations=done.observations,
             rewards=done.outcome.rewards,
             terminated=done.outcome.terminated,
+            captured=done.outcome.captured,
             truncated=done.truncated,
             contacts=contacts,
             modes=modes,

@@ -44,9 +44,8 @@ class VectorPursuitEnv:
     (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
     with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
     float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
-    (B, n_predators),
-    ``left_area`` (B, n_agents), ``episode_return`` (B, n_agents) and ``episode_length`` (B,)
-    of the episodes that ended.
+    (B, n_predators), ``left_area`` (B, n_agents), ``episode_return`` (B, n_agents) and
+    ``episode_length`` (B,) of the episodes that ended.
     """
 
     def __init__(self, num_envs: int, condition: str | None = None, *, backend: Backend = "pymunk", **options: Any):
@@ -88,7 +87,7 @@ class VectorPursuitEnv:
             "done": done,
             "final_observation": result.observations,
             "positions": self.core.world.positions.copy(),
-            "captured": result.contacts.prey.any(axis=1),
+            "captured": result.captured,
             "touching_prey": result.contacts.prey,
             "left_area": result.contacts.wall,
             "episode_return": self._returns.copy(),

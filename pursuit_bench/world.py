@@ -243,7 +243,7 @@ class PymunkWorld:
         t = WALL_THICKNESS / 2  # segment radius: the inner face is at ±half_size
         c = half_size + t
         corners = [(-c, -c), (c, -c), (c, c), (-c, c)]
-        for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1], strict=False):
+        for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1], strict=True):
             wall = pymunk.Segment(self.space.static_body, (ox + ax, oy + ay), (ox + bx, oy + by), t)
             wall.collision_type = _WALL
             wall.sensor = self.wall_rule == "terminate"  # the episode ends there: never pushed back

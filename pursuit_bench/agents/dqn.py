@@ -77,9 +77,8 @@ class DQNLearner:
     def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Q-values (M, B, A) and V(s) (M, B) of the online network for observations (M, B, n_obs)."""
         with torch.no_grad():
-            _, value, advantage = self.online.streams(torch.as_tensor(obs, dtype=torch.float32))
-            q = value + advantage - advantage.mean(dim=-1, keepdim=True)
-        return q.numpy(), value[..., 0].numpy()
+            q, value = self.online.q_and_value(torch.as_tensor(obs, dtype=torch.float32))
+        return q.numpy(), value.numpy()
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
         """Q-values (M, B, A) for observations (M, B, n_obs)."""
@@ -186,7 +185,6 @@ class DQNLearner:
                 continue
             s = self.optimizer.state[p]
             if not s:
-                s["step"] = torch.tensor(step)
                 s["exp_avg"] = torch.zeros_like(p)
                 s["exp_avg_sq"] = torch.zeros_like(p)
             s["step"] = torch.tensor(step)

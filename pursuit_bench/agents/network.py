@@ -51,6 +51,10 @@ class DuelingQNetwork(nn.Module):
         value_hidden = torch.relu(self.value1(h))
         return value_hidden, self.value2(value_hidden), self.advantage2(torch.relu(self.advantage1(h)))
 
-    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+    def q_and_value(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Q-values (M, B, A), ``V + A - mean(A)``, and V(s) (M, B)."""
         _, value, advantage = self.streams(obs)
-        return value + advantage - advantage.mean(dim=-1, keepdim=True)
+        return value + advantage - advantage.mean(dim=-1, keepdim=True), value[..., 0]
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.q_and_value(obs)[0]

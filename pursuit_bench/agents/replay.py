@@ -52,8 +52,12 @@ class CumulativeSumSampler:
         uniform in [0, 1)."""
         cumulative = np.cumsum(self.values[:size])
         picks = np.searchsorted(cumulative, fractions * cumulative[-1], side="right")
-        last = np.flatnonzero(self.values[:size])[-1]  # rounding at the top never picks a zero
-        return np.minimum(picks, last)
+        # a zero-valued slot adds nothing to the sum, so only rounding at the very top can pick
+        # past the end: those picks go to the last slot with a value
+        over = picks >= size
+        if over.any():
+            picks[over] = np.flatnonzero(self.values[:size])[-1]
+        return picks
 
 
 class SumTreeSampler:
