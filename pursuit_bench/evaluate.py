@@ -113,15 +113,21 @@ def evaluate_agents(
     num_envs: int = 64,
     recorder: Recorder | None = None,
     backend: Backend = "pymunk",
+    predator_kind: str | None = None,
 ) -> dict[str, Any]:
     """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
     learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
     cumulative reward as trained, then with it replaced by always-chase and by always-stalk,
     the other agents fixed; every variant plays the same seeds. Also the capture rate, time to
     capture, distance travelled and fraction of steps in chase, as trained. The episodes as
-    trained go into ``recorder``."""
+    trained go into ``recorder``.
+
+    Each panel holds ``trained`` (the predator as trained), ``always_chase`` and
+    ``always_stalk``; ``predator_kind`` names what the trained predators are (``hierarchical``,
+    ``flat``, …; by default read from the first predator's ``kind``)."""
     names = list(agents)
     predators, prey = names[:-1], names[-1]
+    kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
     epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
 
     def play(actors: dict[str, Actor], rec: Recorder | None = None) -> Episodes:
@@ -137,7 +143,7 @@ def evaluate_agents(
         panels.append(
             {
                 "predator": name,
-                "hierarchical": float(trained.returns[:, i].mean()),
+                "trained": float(trained.returns[:, i].mean()),
                 "always_chase": float(chase.returns[:, i].mean()),
                 "always_stalk": float(stalk.returns[:, i].mean()),
             }
@@ -147,6 +153,7 @@ def evaluate_agents(
         "condition": condition,
         "episodes": episodes,
         "seed": seed,
+        "predator_kind": kind,
         "panels": panels,
         "capture_rate": float(captured.mean()),
         "time_to_capture_s": float(trained.lengths[captured].mean() * 0.1) if captured.any() else None,

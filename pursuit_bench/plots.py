@@ -10,20 +10,19 @@ import matplotlib
 matplotlib.use("Agg")  # files only: no display needed
 import matplotlib.pyplot as plt
 
-BARS = (
-    ("hierarchical", "hierarchical", "#4c72b0"),
-    ("always_chase", "always chase", "#dd8452"),
-    ("always_stalk", "always stalk", "#55a868"),
-)
+BASELINES = (("always_chase", "always chase", "#dd8452"), ("always_stalk", "always stalk", "#55a868"))
+TRAINED_COLOR = "#4c72b0"
 
 
 def reward_bars_png(result: dict[str, Any]) -> bytes:
-    """PNG bytes of one panel per predator: three bars (hierarchical, always chase, always stalk)."""
+    """PNG bytes of one panel per predator: three bars (the trained predator, labelled by its
+    kind; always chase; always stalk)."""
     panels = result["panels"]
+    bars = (("trained", result.get("predator_kind", "trained"), TRAINED_COLOR), *BASELINES)
     fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels) + 0.8, 3.4), squeeze=False, sharey=True)
     for ax, panel in zip(axes[0], panels, strict=True):
-        values = [panel[key] for key, _, _ in BARS]
-        ax.bar([label for _, label, _ in BARS], values, color=[color for _, _, color in BARS])
+        values = [panel[key] for key, _, _ in bars]
+        ax.bar([label for _, label, _ in bars], values, color=[color for _, _, color in bars])
         ax.axhline(0.0, color="black", linewidth=0.8)
         ax.set_title(panel["predator"])
         ax.tick_params(axis="x", labelrotation=20)

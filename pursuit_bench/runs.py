@@ -2,28 +2,77 @@
 
 ``runs/NAME/`` holds ``config.json`` (the resolved configuration), ``metrics.jsonl`` (one row
 per episode), ``checkpoint.pt`` (the latest checkpoint), ``train.rrd`` (the Rerun recording;
-a resumed run writes ``train.resume1.rrd``, …) and, after ``eval``, ``eval.json``, ``eval.png``
-and ``eval.rrd``. The config, the checkpoint and the results are written atomically.
+a resumed run adds ``train.resume1.rrd``, …, pieces of one recording with the same recording
+id) and, after ``eval``, ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*`` with
+``--tag``). The config, the checkpoint and the results are written atomically; ``.lock`` is held
+by the one process that trains or evaluates in the folder.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
+import os
+import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from pursuit_bench.agents import checkpoint
+from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
+from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.files import atomic_write_text
-from pursuit_bench.train import TrainConfig
+from pursuit_bench.task import obs_size
+from pursuit_bench.train import TrainConfig, build_agents, load_agents_state
 
 RUN_FORMAT = "pursuit-bench-run-1"
 CONFIG = "config.json"
 METRICS = "metrics.jsonl"
 CHECKPOINT = "checkpoint.pt"
-EVAL_JSON = "eval.json"
-EVAL_PNG = "eval.png"
-EVAL_RRD = "eval.rrd"
-RUN_FILES = (CONFIG, METRICS, CHECKPOINT, EVAL_JSON, EVAL_PNG, EVAL_RRD)
+LOCK = ".lock"
+RUN_FILES = (CONFIG, METRICS, CHECKPOINT)
+_TAG = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+
+
+class RunBusy(ValueError):
+    """Another process holds the run folder."""
+
+
+@contextlib.contextmanager
+def locked(folder: Path) -> Iterator[None]:
+    """Hold the run folder's exclusive lock (``fcntl.flock`` on ``.lock``) while the block runs;
+    :class:`RunBusy` at once if another process holds it. The lock dies with its process."""
+    fd = os.open(folder / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            raise RunBusy(f"{folder} is in use by another pursuit-bench process (pid {holder})") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield
+    finally:
+        os.close(fd)
+
+
+def eval_paths(folder: Path, tag: str | None = None) -> dict[str, Path]:
+    """``{"json", "png", "rrd"}``: ``eval.*``, or ``eval-TAG.*`` with a tag."""
+    if tag is not None and not _TAG.fullmatch(tag):
+        raise ValueError(f"tag={tag!r}: expected letters, digits, '_', '-' or '.' (not first)")
+    stem = "eval" if tag is None else f"eval-{tag}"
+    return {kind: folder / f"{stem}.{kind}" for kind in ("json", "png", "rrd")}
+
+
+def holds_only_unstarted_or_nothing(folder: Path) -> bool:
+    """True for a folder a new run may take without ``--force``: empty (but for a lock), or
+    holding a run that never reached its first checkpoint."""
+    if not folder.exists():
+        return True
+    if is_run(folder):
+        return not (folder / CHECKPOINT).exists()
+    return all(p.name == LOCK for p in folder.iterdir())
 
 
 def is_run(folder: Path) -> bool:
@@ -83,6 +132,19 @@ def keep_metrics(folder: Path, episodes: int) -> None:
     atomic_write_text(path, "".join(r + "\n" for r in rows))
 
 
+def load_agents(folder: str | os.PathLike[str]) -> dict[str, LearningAgent | ScriptedAgent]:
+    """The agents of a trained run folder by name (``predator_0`` …, ``prey_0``), with the
+    weights of its last checkpoint, ready for ``act(observation)`` and
+    :func:`~pursuit_bench.evaluate.evaluate_agents`. ``ValueError`` if the folder holds no
+    trained run."""
+    folder = Path(folder)
+    config, _ = read_config(folder)
+    state = load_checkpoint(folder)
+    _, agents = build_agents(config, obs_size(len(CONDITIONS[config.condition].agent_names)))
+    load_agents_state(agents, state, config.condition)
+    return agents
+
+
 def recording_path(folder: Path) -> Path:
     """``train.rrd``, or the next ``train.resumeK.rrd`` if earlier sessions wrote theirs."""
     path = folder / "train.rrd"
@@ -93,9 +155,16 @@ def recording_path(folder: Path) -> Path:
     return path
 
 
+def recordings(folder: Path) -> list[Path]:
+    """The run's recordings: the training pieces in order, then the evaluations."""
+    pieces = sorted(folder.glob("train*.rrd"), key=lambda p: (len(p.name), p.name))
+    return pieces + sorted(folder.glob("eval*.rrd"))
+
+
 def clear(folder: Path) -> None:
     """Remove a run's own files (and only those) so that a fresh run can start there."""
     for name in RUN_FILES:
         (folder / name).unlink(missing_ok=True)
-    for rrd in folder.glob("train*.rrd"):
-        rrd.unlink()
+    for pattern in ("train*.rrd", "eval.*", "eval-*.*", ".*.tmp"):
+        for path in folder.glob(pattern):
+            path.unlink()

@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pursuit_bench.env import PursuitParallelEnv
+from pursuit_bench.pettingzoo_env import PursuitParallelEnv
 from pursuit_bench.policies import AlwaysChase, FleeingPrey, Policy
 
 
@@ -19,7 +19,7 @@ def default_opponent(agent: str) -> Policy:
 
 
 class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
-    """One agent of :class:`~pursuit_bench.env.PursuitParallelEnv` as a Gymnasium env.
+    """One agent of :class:`~pursuit_bench.pettingzoo_env.PursuitParallelEnv` as a Gymnasium env.
 
     Spaces, rewards and episode end are that agent's in the multi-agent env (see its docstring).
 

@@ -106,7 +106,7 @@ def _observe_kernel(z, w, obs, los):
 
 
 def observe(positions: np.ndarray, velocities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Observations and the unit LOS of every agent (SPEC "Observations").
+    """Observations and the unit LOS of every agent (docs/spec.md, observations).
 
     Returns ``(obs, los)``: obs (B, n_agents, 6 n - 2) float32, for agent i ``[x, y, own velocity
     (u, v)]`` then, for each other agent, ``[x, y, relative position (u, v), velocity (u, v)]``,
@@ -281,7 +281,7 @@ def finish_step(
 
 
 def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcome:
-    """SPEC's reward table; events in one step add up. A capture gives +1 to every predator
+    """the spec's (docs/spec.md) reward table; events in one step add up. A capture gives +1 to every predator
     (``shared``) or to each predator touching the prey (``individual``) and -1 to the prey;
     touching a wall gives -1 to that agent; a step in chase mode costs ``chase_cost``. A capture
     terminates, and so does a wall contact under the ``terminate`` wall rule."""

@@ -138,6 +138,15 @@ def build_agents(config: TrainConfig, n_obs: int) -> tuple[list[Group], dict[str
     return groups, {a: agents[a] for a in names}
 
 
+def load_agents_state(agents: dict[str, LearningAgent | ScriptedAgent], state: dict[str, Any], condition: str) -> None:
+    """Load a run checkpoint's agents (:meth:`Trainer.state_dict`) into ``agents`` by name."""
+    learning = {name: a for name, a in agents.items() if isinstance(a, LearningAgent)}
+    if set(state["agents"]) != set(learning):
+        raise ValueError(f"checkpoint holds agents {sorted(state['agents'])}, this run has {sorted(learning)}")
+    for name, agent in learning.items():
+        load_agent_state(agent, state["agents"][name], condition)
+
+
 class Trainer:
     """Runs :class:`TrainConfig`; ``on_episode`` is called with each finished episode. With a
     ``recorder``, every ``record_every``-th episode (and the first) goes into it, and every
@@ -174,6 +183,7 @@ class Trainer:
         return {
             "episodes_done": self.episodes_done,
             "env_steps": self.env_steps,
+            "recording_clock": self.recorder.clock if self.recorder is not None else 0,
             "config": self.config.to_dict(),
             "agents": {
                 a.name: agent_state(a, self.config.condition)
@@ -185,16 +195,14 @@ class Trainer:
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore from :meth:`state_dict`. Episodes under way when it was taken are not resumed:
         every arena starts afresh, from a seed derived from the run's seed and the episode count."""
-        learning = {a.name: a for a in self.agents.values() if isinstance(a, LearningAgent)}
-        if set(state["agents"]) != set(learning):
-            raise ValueError(f"checkpoint holds agents {sorted(state['agents'])}, this run has {sorted(learning)}")
-        for name, agent in learning.items():
-            load_agent_state(agent, state["agents"][name], self.config.condition)
+        load_agents_state(self.agents, state, self.config.condition)
         self.episodes_done, self.env_steps = int(state["episodes_done"]), int(state["env_steps"])
         self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
         self._chase_steps[:] = 0.0
         if self._traces is not None:
             self._traces = EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps)
+        if self.recorder is not None:  # a resumed piece of the recording plays on after the last
+            self.recorder.clock = max(self.recorder.clock, int(state.get("recording_clock", 0)))
 
     def run(self, should_stop: Callable[[], bool] = lambda: False) -> None:
         """Step until the configured number of episodes has finished (or ``should_stop()``)."""

@@ -4,7 +4,7 @@ Every array is batched over arenas: positions and velocities are ``(B, n_agents,
 each arena's own frame (the arena is ``[-1, 1]²``). Agents ``0 … n_agents-2`` are predators and the
 last one is the prey: the world needs that much to know which pairs pass through each other.
 
-Dynamics (SPEC "World"; authors' code): velocity first, then position, no lag between an action
+Dynamics (docs/spec.md, the arena; authors' code): velocity first, then position, no lag between an action
 and its effect::
 
     v' = (1 - DAMPING) · v + a · DT

@@ -8,9 +8,7 @@ import time
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
-
-from pursuit_bench.cli.main import main
+from cli_helpers import cli_process, run_cli, wait_for
 
 TINY = [
     "--episodes",
@@ -24,11 +22,6 @@ TINY = [
     "--checkpoint-every",
     "5",
 ]
-
-
-def run_cli(*args: str) -> tuple[int, str]:
-    result = CliRunner().invoke(main, list(args))
-    return result.exit_code, result.output
 
 
 def train_tiny(out: Path, *extra: str) -> None:
@@ -58,7 +51,7 @@ def test_train_then_eval_writes_the_run_folder(tmp_path: Path) -> None:
     assert (result["condition"], result["episodes"], result["seed"]) == ("2p-high-shared", 10, 12345)
     assert [p["predator"] for p in result["panels"]] == ["predator_0", "predator_1"]
     for panel in result["panels"]:
-        assert all(isinstance(panel[k], float) for k in ("hierarchical", "always_chase", "always_stalk"))
+        assert all(isinstance(panel[k], float) for k in ("trained", "always_chase", "always_stalk"))
     assert 0.0 <= result["capture_rate"] <= 1.0 and set(result["chase_fraction"]) == {"predator_0", "predator_1"}
     assert (out / "eval.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (out / "eval.png").stat().st_size > 5000
     assert (out / "eval.rrd").stat().st_size > 0
@@ -94,7 +87,7 @@ def test_view_without_a_display_says_what_to_do(tmp_path: Path, monkeypatch) -> 
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     recording = tmp_path / "x.rrd"
-    recording.write_bytes(b"")
+    recording.write_bytes(b"RRF2")
     code, output = run_cli("view", str(recording))
     assert code == 1 and "no display" in output and "rerun --web-viewer" in output and "Traceback" not in output
 
@@ -115,7 +108,7 @@ def test_bad_run_folders(tmp_path: Path) -> None:
     code, output = run_cli("train", "--condition", "2p-high-shared", "--out", str(out), *TINY)
     assert code == 2 and "already holds this run" in output
     code, output = run_cli("train", "--condition", "1p-low", "--out", str(out), "--resume", *TINY)
-    assert code == 2 and "another configuration" in output
+    assert code == 2 and "--condition 1p-low disagrees with the run's 2p-high-shared" in output
 
     checkpoint = out / "checkpoint.pt"
     good = checkpoint.read_bytes()
@@ -129,22 +122,6 @@ def test_bad_run_folders(tmp_path: Path) -> None:
     code, output = run_cli("train", "--condition", "1p-low", "--out", str(out), "--force", *TINY, "--no-record")
     assert code == 0, output
     assert json.loads((out / "config.json").read_text())["train"]["condition"] == "1p-low"
-
-
-def cli_process(*args: str) -> subprocess.Popen:
-    return subprocess.Popen(
-        [sys.executable, "-m", "pursuit_bench.cli.main", *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-
-
-def wait_for(path: Path, timeout: float = 120.0) -> None:
-    start = time.monotonic()
-    while not path.exists():
-        assert time.monotonic() - start < timeout, f"{path} never appeared"
-        time.sleep(0.1)
 
 
 def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path) -> None:
@@ -175,7 +152,7 @@ def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: 
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 130, stderr
-    assert "interrupted at episode" in stderr and "Traceback" not in stderr
+    assert "SIGINT: stopped at episode" in stderr and "Traceback" not in stderr
     state_rows = (out / "metrics.jsonl").read_text().splitlines()
     assert len(state_rows) > 0
     verify = subprocess.run(

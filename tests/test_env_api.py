@@ -29,7 +29,7 @@ def test_ten_conditions_by_name() -> None:
 def test_pettingzoo_api_tests(condition: str) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a PettingZoo API warning fails the test, except:
-        # SPEC fixes the predators' action space as MultiDiscrete([2, 12]), which api_test flags
+        # the spec (docs/spec.md) fixes the predators' action space as MultiDiscrete([2, 12]), which api_test flags
         warnings.filterwarnings("ignore", message="Action space for each agent probably should be")
         parallel_api_test(pursuit_bench.parallel_env(condition), num_cycles=400)
         api_test(pursuit_bench.env(condition), num_cycles=400)

@@ -11,7 +11,7 @@ from pursuit_bench.world import Contacts
 
 
 def naive_observation(p: np.ndarray, v: np.ndarray, i: int) -> list[float]:
-    """SPEC's observation for agent i, written with loops and trigonometry."""
+    """the spec's (docs/spec.md) observation for agent i, written with loops and trigonometry."""
     n = len(p)
     prey = n - 1
     if i < prey:

@@ -1,4 +1,4 @@
-"""The world against SPEC's dynamics: closed form, terminal speeds, walls, contacts."""
+"""The world against the spec's (docs/spec.md) dynamics: closed form, terminal speeds, walls, contacts."""
 
 import numpy as np
 import pytest

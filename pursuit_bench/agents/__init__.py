@@ -1,12 +1,30 @@
 """Learning agents: dueling double DQN with prioritized replay, one independent learner per agent
 (optionally stacked into one batched computation), the hierarchical predator, the prey, the flat
-ablation and the scripted baselines."""
+ablation and the scripted baselines.
+
+torch is imported when a learner, network or agent kind is first used: ``agents.config`` alone
+(the hyper-parameters, the presets) stays light for the command line.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from pursuit_bench.agents.config import PAPER, PRESETS, QUICK, AgentConfig
-from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.agents.kinds import KINDS, FlatPredator, HierarchicalPredator, LearningAgent, Prey, ScriptedAgent
-from pursuit_bench.agents.network import DuelingQNetwork
-from pursuit_bench.agents.replay import PrioritizedReplay
+
+if TYPE_CHECKING:
+    from pursuit_bench.agents.dqn import DQNLearner
+    from pursuit_bench.agents.kinds import (
+        KINDS,
+        FlatPredator,
+        HierarchicalPredator,
+        LearningAgent,
+        Prey,
+        ScriptedAgent,
+    )
+    from pursuit_bench.agents.network import DuelingQNetwork
+    from pursuit_bench.agents.replay import PrioritizedReplay
 
 __all__ = [
     "KINDS",
@@ -23,3 +41,23 @@ __all__ = [
     "PrioritizedReplay",
     "ScriptedAgent",
 ]
+
+_LAZY = {
+    "DQNLearner": "dqn",
+    "KINDS": "kinds",
+    "FlatPredator": "kinds",
+    "HierarchicalPredator": "kinds",
+    "LearningAgent": "kinds",
+    "Prey": "kinds",
+    "ScriptedAgent": "kinds",
+    "DuelingQNetwork": "network",
+    "PrioritizedReplay": "replay",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"pursuit_bench.agents.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'pursuit_bench.agents' has no attribute {name!r}")

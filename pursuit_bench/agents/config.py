@@ -1,6 +1,6 @@
 """Every hyper-parameter of the learning agents, and the two presets.
 
-``paper`` is SPEC's values (paper 3.3, authors' code). ``quick`` is ours, tuned so that the main
+``paper`` is the spec's (docs/spec.md) values (paper 3.3, authors' code). ``quick`` is ours, tuned so that the main
 result (a hierarchical predator beating the always-chase baseline) shows on a 2-core machine in
 minutes; see the field docstrings and README for why each value differs.
 """
@@ -37,16 +37,16 @@ class AgentConfig:
     epsilon_decay_steps: int = 10_000
     """Transitions over which ε falls linearly (paper 3.3: 1e4 steps)."""
     alpha: float = 0.6
-    """Priority exponent applied when sampling (SPEC)."""
+    """Priority exponent applied when sampling (docs/spec.md)."""
     beta_start: float = 0.4
-    """Importance-sampling exponent at the first update (SPEC)."""
+    """Importance-sampling exponent at the first update (docs/spec.md)."""
     beta_end: float = 1.0
-    """Importance-sampling exponent at the end of its annealing (SPEC)."""
+    """Importance-sampling exponent at the end of its annealing (docs/spec.md)."""
     beta_anneal_steps: int = 10_000_000
-    """Transitions over which β rises linearly to ``beta_end``. SPEC does not fix the horizon;
+    """Transitions over which β rises linearly to ``beta_end``. docs/spec.md does not fix the horizon;
     for ``paper`` we take 1e7, about the first tenth of 1e6 short episodes."""
     priority_epsilon: float = 1e-4
-    """Added to |δ| to form a priority, so that no transition is never sampled (SPEC)."""
+    """Added to |δ| to form a priority, so that every transition keeps a chance to be sampled (docs/spec.md)."""
     prioritized: bool = True
     """Prioritized replay (True) or uniform replay (False, for ablations and tests)."""
     replay_ratio: float = 1.0
@@ -107,7 +107,7 @@ class AgentConfig:
         return dataclasses.asdict(self)
 
 
-#: SPEC's values: the paper's hyper-parameters.
+#: the spec's (docs/spec.md) values: the paper's hyper-parameters.
 PAPER = AgentConfig()
 
 #: Ours: the paper's learning rate needs ~1e6 episodes; on 2 cores we want the result in minutes.

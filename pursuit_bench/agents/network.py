@@ -1,7 +1,7 @@
 """The dueling Q-network (Wang et al. 2016), with parameters stacked over M independent members.
 
 Trunk ``in → 64 → 64`` (ReLU), value head ``64 → 32 → 1``, advantage head ``64 → 32 → A``,
-``Q = V + A - mean(A)`` (SPEC "Agents"). Member m's parameters are slice m of every tensor, so M
+``Q = V + A - mean(A)`` (docs/spec.md, the agents). Member m's parameters are slice m of every tensor, so M
 agents' forward and backward passes run as batched matrix products while their parameters stay
 separate: no gradient flows between members.
 """

@@ -1,6 +1,6 @@
 """Proportional prioritized experience replay (Schaul et al. 2015), vectorized and exact.
 
-Priorities are ``|δ| + ε`` (SPEC); a transition is drawn with probability ``p_i^α / Σ p^α``;
+Priorities are ``|δ| + ε`` (docs/spec.md); a transition is drawn with probability ``p_i^α / Σ p^α``;
 new transitions enter at the largest priority seen so far; importance weights are
 ``(N · P(i))^-β`` divided by the batch maximum. Sampling only ever sees the filled slots.
 

@@ -2,7 +2,9 @@
 
 The commands parse options into configurations and call the library (``train.Trainer``,
 ``evaluate.evaluate_agents``, ``recording.Recorder``); they hold no logic of their own beyond
-run folders, progress and errors. Bad input is a one-line error and exit status 2.
+run folders, progress and errors. Bad input is a one-line error and exit status 2; SIGINT and
+SIGTERM stop a command cleanly with status 130 and 143. torch and Rerun are imported inside the
+commands that use them, so that ``--help`` and errors come at once.
 """
 
 from __future__ import annotations
@@ -17,20 +19,24 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import uuid
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
-import torch
+from click.core import ParameterSource
 
-from pursuit_bench import runs
 from pursuit_bench.agents.config import PRESETS, AgentConfig
+from pursuit_bench.cli.progress import Progress, SignalCatcher, Stopped
 from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.evaluate import evaluate_agents
-from pursuit_bench.files import atomic_write_bytes, atomic_write_text
-from pursuit_bench.plots import reward_bars_png
-from pursuit_bench.recording import Recorder
-from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
+
+if TYPE_CHECKING:
+    from pursuit_bench.train import EpisodeRecord, TrainConfig
+
+PREDATOR_KINDS = ("hierarchical", "flat", "always_chase", "always_stalk")
+#: Options that only say how this process runs: free to differ when a run is resumed.
+RUNTIME_OPTIONS = {"out", "resume", "force", "no_record", "threads", "log_every", "episodes"}
 
 
 class BadInput(click.ClickException):
@@ -82,24 +88,63 @@ def conditions() -> None:
         click.echo(f"{name:22s} {c.n_predators:>9d} {c.chase_cost:>10g}  {c.reward_sharing}")
 
 
-def _start_run(out: Path, config: TrainConfig, settings: dict[str, Any], resume: bool, force: bool) -> dict | None:
-    """Prepare the run folder; returns the checkpoint state to resume from, or None."""
-    if resume and force:
-        raise BadInput("--resume and --force contradict each other: pick one")
-    if out.exists() and not out.is_dir():
-        raise BadInput(f"--out {out}: exists and is not a folder")
+def _options_given(ctx: click.Context) -> set[str]:
+    """The options the user typed (or set through the environment), not left at their defaults."""
+    sources = (ParameterSource.COMMANDLINE, ParameterSource.ENVIRONMENT)
+    return {name for name in ctx.params if ctx.get_parameter_source(name) in sources}
+
+
+def _flag(ctx: click.Context, name: str) -> str:
+    param = next(p for p in ctx.command.params if p.name == name)
+    return param.opts[0]
+
+
+def _resumed_config(
+    ctx: click.Context, out: Path, episodes: int | None
+) -> tuple[TrainConfig, dict[str, Any], str | None]:
+    """The configuration saved in ``out`` with the options given beside ``--resume`` checked
+    against it; ``--episodes`` moves the target. Returns (config, settings, what changed)."""
+    from pursuit_bench import runs
+
+    try:
+        saved, settings = runs.read_config(out)
+    except ValueError as error:
+        raise BadInput(f"cannot resume: {error}") from None
+    saved_values: dict[str, Any] = {f.name: getattr(saved, f.name) for f in dataclasses.fields(saved)}
+    saved_values.update(saved.agent.to_dict())
+    saved_values.update(settings)
+    for name in sorted(_options_given(ctx) - RUNTIME_OPTIONS):
+        given, was = ctx.params[name], saved_values.get(name)
+        if given != was:
+            raise BadInput(
+                f"--resume: {_flag(ctx, name)} {given} disagrees with the run's {was} ({out / runs.CONFIG}); "
+                "leave it out to keep the run's, or start over with --force"
+            )
+    note = None
+    if episodes is not None and episodes != saved.episodes:
+        verb = "extending" if episodes > saved.episodes else "shortening"
+        note = f"{verb} the run from {saved.episodes} to {episodes} episodes"
+        saved = dataclasses.replace(saved, episodes=episodes)
+    return saved, settings, note
+
+
+def _prepare_folder(out: Path, config: TrainConfig, settings: dict[str, Any], resume: bool, force: bool) -> dict | None:
+    """Make ``out`` hold this run (its lock held); returns the checkpoint to resume from, or None."""
+    from pursuit_bench import runs
+
     if resume:
-        try:
-            saved, _ = runs.read_config(out)
-            state = runs.load_checkpoint(out)
-        except ValueError as error:
-            raise BadInput(f"cannot resume: {error}") from None
-        if saved != dataclasses.replace(config, episodes=saved.episodes):
-            raise BadInput(f"--resume: {out} holds a run with another configuration; leave the options as they were")
-        runs.keep_metrics(out, int(state["episodes_done"]))
+        state = None
+        if (out / runs.CHECKPOINT).exists():
+            try:
+                state = runs.load_checkpoint(out)
+            except ValueError as error:
+                raise BadInput(f"cannot resume: {error}") from None
+        else:
+            click.echo(f"{out}: no checkpoint yet; starting the run from its beginning", err=True)
+        runs.keep_metrics(out, int(state["episodes_done"]) if state else 0)
         runs.write_config(out, config, settings)
         return state
-    if out.exists() and any(out.iterdir()):
+    if not runs.holds_only_unstarted_or_nothing(out):
         if not runs.is_run(out):
             raise BadInput(f"--out {out}: the folder is not empty and holds no pursuit-bench run; choose another")
         if not force:
@@ -110,51 +155,104 @@ def _start_run(out: Path, config: TrainConfig, settings: dict[str, Any], resume:
                 same = False
             what = "this run" if same else "a different run"
             raise BadInput(f"--out {out} already holds {what}: pass --resume to continue it or --force to start over")
-        runs.clear(out)
-    out.mkdir(parents=True, exist_ok=True)
+    runs.clear(out)
     runs.write_config(out, config, settings)
     return None
 
 
-def _progress_line(record: EpisodeRecord | None, returns: list[float], captures: list[bool], epsilon: float) -> str:
-    if record is None:
-        return ""
-    window = slice(-100, None)
-    ret = sum(returns[window]) / max(len(returns[window]), 1)
-    cap = sum(captures[window]) / max(len(captures[window]), 1)
-    return f"return {ret:+.2f} | capture {cap:.0%} | ε {epsilon:.2f}"
+def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: Callable[[], float]) -> str:
+    """The last 100 episodes: every agent's mean return, the capture rate, ε."""
+    if not captures:
+        return "no episode finished yet"
+    parts = [f"{name} {sum(r[-100:]) / len(r[-100:]):+.2f}" for name, r in returns.items()]
+    recent = captures[-100:]
+    return f"return {' '.join(parts)} | capture {sum(recent) / len(recent):.0%} | ε {epsilon():.2f}"
 
 
 @main.command()
-@click.option("--condition", type=click.Choice(list(CONDITIONS)), default="1p-high", show_default=True)
+@click.option(
+    "--condition", type=click.Choice(list(CONDITIONS)), default="1p-high", show_default=True, help="Which task."
+)
 @click.option(
     "--preset", type=click.Choice(list(PRESETS)), default="quick", show_default=True, help="Hyper-parameters."
 )
-@click.option("--episodes", type=click.IntRange(min=1), default=None, help="Episodes to train [preset's].")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option(
+    "--episodes",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Episodes to train [preset's: "
+    + ", ".join(f"{name} {preset.episodes}" for name, preset in PRESETS.items())
+    + "]. With --resume: the run's saved target unless given, which extends or shortens the run.",
+)
+@click.option(
+    "--seed",
+    type=click.IntRange(min=0),
+    default=0,
+    show_default=True,
+    help="Seeds the arenas, the networks and every learner's sampling.",
+)
 @click.option("--out", type=click.Path(path_type=Path), default=None, help="Run folder [runs/CONDITION-seedS].")
-@click.option("--resume", is_flag=True, help="Continue the run in --out from its last checkpoint.")
+@click.option(
+    "--resume",
+    is_flag=True,
+    help="Continue the run in --out from its last checkpoint, with its saved configuration "
+    "(options given beside it must agree).",
+)
 @click.option("--force", is_flag=True, help="Start over in --out, replacing the run there.")
 @click.option("--num-envs", type=click.IntRange(min=1), default=8, show_default=True, help="Arenas stepped together.")
 @click.option(
     "--predator",
-    type=click.Choice(["hierarchical", "flat", "always_chase", "always_stalk"]),
+    type=click.Choice(PREDATOR_KINDS),
     default="hierarchical",
     show_default=True,
+    help="The predators: the paper's hierarchical agent, the flat ablation (24 actions, no rule), "
+    "or a fixed baseline that does not learn.",
 )
-@click.option("--prey", type=click.Choice(["learning", "scripted"]), default="learning", show_default=True)
-@click.option("--batched-learners/--separate-learners", default=True, show_default=True)
-@click.option("--backend", type=click.Choice(["pymunk", "numpy"]), default="pymunk", show_default=True)
+@click.option(
+    "--prey",
+    type=click.Choice(["learning", "scripted"]),
+    default="learning",
+    show_default=True,
+    help="A learning prey (the paper's) or the scripted FleeingPrey.",
+)
+@click.option(
+    "--batched-learners/--separate-learners",
+    default=True,
+    show_default=True,
+    help="Update the predators' networks in one stacked pass (same result, faster) or one by one.",
+)
+@click.option(
+    "--backend",
+    type=click.Choice(["pymunk", "numpy"]),
+    default="pymunk",
+    show_default=True,
+    help="Physics of the arenas: pymunk (the reference) or the numpy twin.",
+)
 @click.option(
     "--record-every", type=click.IntRange(min=1), default=100, show_default=True, help="Record every Nth episode."
 )
 @click.option("--no-record", is_flag=True, help="Write no Rerun recording.")
-@click.option("--checkpoint-every", type=click.IntRange(min=1), default=100, show_default=True, help="Episodes.")
+@click.option(
+    "--checkpoint-every",
+    type=click.IntRange(min=1),
+    default=100,
+    show_default=True,
+    help="Episodes between checkpoints.",
+)
 @click.option(
     "--threads", type=click.IntRange(min=1), default=1, show_default=True, help="torch threads (1: repeatable)."
 )
+@click.option(
+    "--log-every",
+    type=click.IntRange(min=1),
+    default=100,
+    show_default=True,
+    help="When stderr is not a terminal: a progress line every N episodes (and at least every minute).",
+)
 @hyperparameter_options
+@click.pass_context
 def train(
+    ctx: click.Context,
     condition: str,
     preset: str,
     episodes: int | None,
@@ -171,162 +269,279 @@ def train(
     no_record: bool,
     checkpoint_every: int,
     threads: int,
+    log_every: int,
     **hyperparameters: Any,
 ) -> None:
-    """Train every agent of a condition together (independent learners) into a run folder."""
+    """Train every agent of a condition together (independent learners) into a run folder.
+
+    Ctrl-C or SIGTERM saves a checkpoint and stops (exit 130 or 143); `--resume` continues."""
+    import torch
+
+    from pursuit_bench import runs
+    from pursuit_bench.train import TrainConfig
+
     torch.set_num_threads(threads)
-    overrides = {k: v for k, v in hyperparameters.items() if v is not None}
-    try:
-        agent = PRESETS[preset].replace(**overrides)
-        config = TrainConfig(
-            condition=condition,
-            agent=agent,
-            episodes=episodes or agent.episodes,
-            num_envs=num_envs,
-            seed=seed,
-            predator=predator,  # type: ignore[arg-type]
-            prey=prey,  # type: ignore[arg-type]
-            batched_learners=batched_learners,
-            backend=backend,  # type: ignore[arg-type]
-        )
-    except ValueError as error:
-        raise BadInput(str(error)) from None
+    if resume and force:
+        raise BadInput("--resume and --force contradict each other: pick one")
     out = out or Path("runs") / f"{condition}-seed{seed}"
-    settings = {"preset": preset, "record_every": record_every, "checkpoint_every": checkpoint_every}
-    state = _start_run(out, config, settings, resume, force)
+    if out.exists() and not out.is_dir():
+        raise BadInput(f"--out {out}: exists and is not a folder")
+    note = None
+    if resume:
+        config, settings, note = _resumed_config(ctx, out, episodes)
+    else:
+        overrides = {k: v for k, v in hyperparameters.items() if v is not None}
+        try:
+            agent = PRESETS[preset].replace(**overrides)
+            config = TrainConfig(
+                condition=condition,
+                agent=agent,
+                episodes=episodes or agent.episodes,
+                num_envs=num_envs,
+                seed=seed,
+                predator=predator,  # type: ignore[arg-type]
+                prey=prey,  # type: ignore[arg-type]
+                batched_learners=batched_learners,
+                backend=backend,  # type: ignore[arg-type]
+            )
+        except ValueError as error:
+            raise BadInput(str(error)) from None
+        settings = {
+            "preset": preset,
+            "record_every": record_every,
+            "checkpoint_every": checkpoint_every,
+            "recording_id": uuid.uuid4().hex,
+        }
+    created = not out.exists()
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        with SignalCatcher(raise_at_once=False).active() as signals, runs.locked(out):
+            state = _prepare_folder(out, config, settings, resume, force)
+            if note:
+                click.echo(f"{out}: {note}", err=True)
+            _train_run(out, config, settings, state, signals, record=not no_record, log_every=log_every)
+    except runs.RunBusy as error:
+        raise BadInput(str(error)) from None
+    except BaseException:
+        if created and not (out / runs.CHECKPOINT).exists():  # failed before its first checkpoint
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+
+
+def _train_run(
+    out: Path,
+    config: TrainConfig,
+    settings: dict[str, Any],
+    state: dict | None,
+    signals: SignalCatcher,
+    *,
+    record: bool,
+    log_every: int,
+) -> None:
+    """Train (the folder ready and locked) until done or a signal: checkpoints, metrics,
+    recording, progress."""
+    from pursuit_bench import runs
+    from pursuit_bench.recording import Recorder
+    from pursuit_bench.train import Trainer
+
+    done = int(state["episodes_done"]) if state else 0
+    if done >= config.episodes:
+        click.echo(f"{out}: already trained {done} of {config.episodes} episodes; nothing to do")
+        return
+    checkpoint_every = int(settings.get("checkpoint_every", 100))
+    names = list(CONDITIONS[config.condition].agent_names)
     recorder = None
-    if not no_record:  # training records every Nth episode: send each at once
-        agent_names = list(CONDITIONS[condition].agent_names)
-        described = {"condition": condition, **config.to_dict(), **settings}
-        recorder = Recorder(runs.recording_path(out), agent_names, described, episodes_per_send=1)
+    if record:  # training records every Nth episode: send each at once
+        recorder = Recorder(
+            runs.recording_path(out),
+            names,
+            {"condition": config.condition, **config.to_dict(), **settings},
+            episodes_per_send=1,
+            recording_id=settings.get("recording_id") or str(out),
+        )
     metrics = (out / runs.METRICS).open("a")
-    watched = CONDITIONS[condition].agent_names[0]
-    returns: list[float] = []
+    returns: dict[str, list[float]] = {name: [] for name in names}
     captures: list[bool] = []
-    last: list[EpisodeRecord] = []
 
     def on_episode(record: EpisodeRecord) -> None:
         metrics.write(json.dumps(record.as_row()) + "\n")
-        returns.append(record.returns[watched])
+        for name in names:
+            returns[name].append(record.returns[name])
         captures.append(record.captured)
-        last[:] = [record]
 
-    trainer = Trainer(config, on_episode, recorder=recorder, record_every=record_every)
+    trainer = Trainer(config, on_episode, recorder=recorder, record_every=int(settings.get("record_every", 100)))
     if state is not None:
         trainer.load_state_dict(state)
         click.echo(f"resuming {out} at episode {trainer.episodes_done} of {config.episodes}", err=True)
-    next_checkpoint = (trainer.episodes_done // checkpoint_every + 1) * checkpoint_every
     learner = trainer.groups[0].learner if trainer.groups else None  # its ε is shown
-    progress: Any = click.progressbar(
-        length=config.episodes,
-        label=f"training {condition}",
-        file=sys.stderr,
-        item_show_func=lambda _: _progress_line(
-            last[0] if last else None, returns, captures, learner.epsilon if learner else 0.0
-        ),
+    progress = Progress(
+        f"training {config.condition}",
+        config.episodes,
+        trainer.episodes_done,
+        lambda: _describe(returns, captures, lambda: learner.epsilon if learner else 0.0),
+        every_episodes=log_every,
     )
-    try:
-        with progress as bar:
-            bar.update(trainer.episodes_done)
-            while trainer.episodes_done < config.episodes:
-                before = trainer.episodes_done
-                trainer.step()
-                bar.update(trainer.episodes_done - before, current_item=last[0] if last else None)
-                if trainer.episodes_done >= next_checkpoint:
-                    metrics.flush()
-                    runs.save_checkpoint(out, trainer.state_dict())
-                    next_checkpoint += checkpoint_every
-    except KeyboardInterrupt:
-        metrics.close()
-        runs.save_checkpoint(out, trainer.state_dict())
-        runs.keep_metrics(out, trainer.episodes_done)
-        if recorder is not None:
-            recorder.close()
-        click.echo(
-            f"\ninterrupted at episode {trainer.episodes_done}: checkpoint saved; "
-            f"continue with: pursuit-bench train --out {out} --resume (and the same options)",
-            err=True,
-        )
-        sys.exit(130)
+    next_checkpoint = (trainer.episodes_done // checkpoint_every + 1) * checkpoint_every
+    while trainer.episodes_done < config.episodes and signals.signum is None:
+        trainer.step()
+        progress.update(trainer.episodes_done)
+        if trainer.episodes_done >= next_checkpoint:
+            metrics.flush()
+            runs.save_checkpoint(out, trainer.state_dict())
+            next_checkpoint += checkpoint_every
+    progress.close()
     metrics.close()
     runs.save_checkpoint(out, trainer.state_dict())
     runs.keep_metrics(out, trainer.episodes_done)
     if recorder is not None:
         recorder.close()
-    click.echo(f"trained {trainer.episodes_done} episodes of {condition} into {out}/")
+    if signals.signum is not None:
+        stopped = Stopped(signals.signum)
+        click.echo(
+            f"\n{stopped}: stopped at episode {trainer.episodes_done}; checkpoint saved; "
+            f"continue with: pursuit-bench train --out {out} --resume",
+            err=True,
+        )
+        sys.exit(stopped.exit_code)
+    click.echo(f"trained {trainer.episodes_done} episodes of {config.condition} into {out}/")
     click.echo(f"  metrics: {out / runs.METRICS}   checkpoint: {out / runs.CHECKPOINT}")
     if recorder is not None:
-        click.echo(f"  recording: {recorder.path}   (pursuit-bench view {recorder.path})")
+        click.echo(f"  recording: {recorder.path}   (pursuit-bench view {out})")
 
 
 @main.command(name="eval")
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--episodes", type=click.IntRange(min=1), default=1000, show_default=True)
-@click.option("--seed", type=int, default=12345, show_default=True)
-@click.option("--num-envs", type=click.IntRange(min=1), default=64, show_default=True)
+@click.option("--episodes", type=click.IntRange(min=1), default=1000, show_default=True, help="Episodes per variant.")
+@click.option(
+    "--seed",
+    type=click.IntRange(min=0),
+    default=12345,
+    show_default=True,
+    help="Seeds the evaluation arenas (every variant plays the same ones).",
+)
+@click.option("--num-envs", type=click.IntRange(min=1), default=64, show_default=True, help="Arenas stepped together.")
 @click.option("--no-record", is_flag=True, help="Write no Rerun recording of the evaluated episodes.")
-@click.option("--threads", type=click.IntRange(min=1), default=1, show_default=True)
-def evaluate(run: Path, episodes: int, seed: int, num_envs: int, no_record: bool, threads: int) -> None:
-    """Evaluate a trained RUN by the paper's protocol; writes eval.json, eval.png and eval.rrd."""
+@click.option(
+    "--threads", type=click.IntRange(min=1), default=1, show_default=True, help="torch threads (1: repeatable)."
+)
+@click.option(
+    "--tag",
+    default=None,
+    help="Write eval-TAG.json, .png and .rrd instead of eval.*, so that evaluations with other seeds "
+    "or episode counts sit side by side.",
+)
+def evaluate(
+    run: Path, episodes: int, seed: int, num_envs: int, no_record: bool, threads: int, tag: str | None
+) -> None:
+    """Evaluate a trained RUN by the paper's protocol; writes eval.json, eval.png and eval.rrd.
+
+    The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
+    the previous ones as they were (exit 130 or 143)."""
+    import torch
+
+    from pursuit_bench import runs
+
     torch.set_num_threads(threads)
     try:
-        config, _ = runs.read_config(run)
-        state = runs.load_checkpoint(run)
-        trainer = Trainer(dataclasses.replace(config, num_envs=1))
-        trainer.load_state_dict(state)
-    except ValueError as error:
+        paths = runs.eval_paths(run, tag)
+        runs.read_config(run)
+        with runs.locked(run):
+            _evaluate_run(run, paths, episodes=episodes, seed=seed, num_envs=num_envs, record=not no_record, tag=tag)
+    except ValueError as error:  # RunBusy too
         raise BadInput(str(error)) from None
+
+
+def _evaluate_run(
+    run: Path, paths: dict[str, Path], *, episodes: int, seed: int, num_envs: int, record: bool, tag: str | None
+) -> None:
+    from pursuit_bench import runs
+    from pursuit_bench.evaluate import evaluate_agents
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.plots import reward_bars_png
+    from pursuit_bench.recording import Recorder
+
+    config, _ = runs.read_config(run)
+    agents = runs.load_agents(run)
+    state = runs.load_checkpoint(run)
     names = list(CONDITIONS[config.condition].agent_names)
+    partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder = None
-    if not no_record:
-        recorder = Recorder(
-            run / runs.EVAL_RRD, names, {"condition": config.condition, "evaluation": True, **config.to_dict()}
-        )
     try:
-        result = evaluate_agents(
-            config.condition,
-            trainer.agents,  # type: ignore[arg-type]
-            episodes=episodes,
-            seed=seed,
-            prey_epsilon=0.1 if config.prey == "learning" else None,
-            num_envs=num_envs,
-            recorder=recorder,
-            backend=config.backend,
-        )
-    finally:
+        with SignalCatcher(raise_at_once=True).active():
+            if record:
+                described = {"condition": config.condition, "evaluation": True, **config.to_dict()}
+                recorder = Recorder(partial["rrd"], names, described)
+            result = evaluate_agents(
+                config.condition,
+                agents,  # type: ignore[arg-type]
+                episodes=episodes,
+                seed=seed,
+                prey_epsilon=0.1 if config.prey == "learning" else None,
+                num_envs=num_envs,
+                recorder=recorder,
+                backend=config.backend,
+                predator_kind=config.predator,
+            )
+            result.update({"trained_episodes": int(state["episodes_done"]), "tag": tag})
+            if recorder is not None:
+                recorder.close()
+            atomic_write_bytes(partial["png"], reward_bars_png(result))
+            atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
+            for kind in ("rrd", "png", "json"):  # eval.json last: it says the set is complete
+                if partial[kind].exists():
+                    os.replace(partial[kind], paths[kind])
+            if recorder is None:
+                paths["rrd"].unlink(missing_ok=True)  # an older recording would not match
+    except Stopped as stopped:
         if recorder is not None:
             recorder.close()
-    result["trained_episodes"] = int(state["episodes_done"])
-    result["predator_kind"] = config.predator
-    atomic_write_text(run / runs.EVAL_JSON, json.dumps(result, indent=2) + "\n")
-    atomic_write_bytes(run / runs.EVAL_PNG, reward_bars_png(result))
+        for path in partial.values():
+            path.unlink(missing_ok=True)
+        click.echo(f"\n{stopped}: evaluation stopped; {run} keeps its previous results", err=True)
+        sys.exit(stopped.exit_code)
+    kind = result["predator_kind"]
     for panel in result["panels"]:
         click.echo(
-            f"{panel['predator']}: hierarchical {panel['hierarchical']:+.3f}  "
+            f"{panel['predator']}: {kind} {panel['trained']:+.3f}  "
             f"always-chase {panel['always_chase']:+.3f}  always-stalk {panel['always_stalk']:+.3f}"
         )
-    click.echo(
-        f"capture rate {result['capture_rate']:.1%}; results in {run / runs.EVAL_JSON} and {run / runs.EVAL_PNG}"
-    )
-    if recorder is not None:
-        click.echo(f"recording: {recorder.path}   (pursuit-bench view {recorder.path})")
+    click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")
+    if record:
+        click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")
+
+
+#: The first bytes of every Rerun recording.
+RRD_MAGIC = b"RRF2"
 
 
 @main.command()
-@click.argument("file", type=click.Path(path_type=Path))
-def view(file: Path) -> None:
-    """Open a recording (.rrd) in the Rerun viewer."""
-    if not file.is_file():
-        raise BadInput(f"{file}: no such recording")
+@click.argument("path", type=click.Path(path_type=Path))
+def view(path: Path) -> None:
+    """Open a recording (.rrd), or every recording of a run folder, in the Rerun viewer."""
+    if path.is_dir():
+        from pursuit_bench import runs
+
+        files = runs.recordings(path)
+        if not files:
+            raise BadInput(f"{path}: the folder holds no recording (.rrd)")
+    elif not path.is_file():
+        raise BadInput(f"{path}: no such recording")
+    else:
+        with path.open("rb") as f:
+            head = f.read(len(RRD_MAGIC))
+        if head != RRD_MAGIC:
+            raise BadInput(f"{path}: not a Rerun recording (.rrd)")
+        files = [path]
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        shown = " ".join(str(f) for f in files)
         raise click.ClickException(
-            f"no display here to open the viewer on. Copy {file} to a machine with one and run "
-            f"`rerun {file.name}`, or serve the web viewer from here: `rerun --web-viewer {file}` "
+            f"no display here to open the viewer on. Copy {shown} to a machine with one and run "
+            f"`rerun {shown}`, or serve the web viewer from here: `rerun --web-viewer {shown}` "
             "and open the address it prints in a browser"
         )
-    rerun = shutil.which("rerun") or sys.executable
-    args = [rerun, str(file)] if rerun != sys.executable else [sys.executable, "-m", "rerun", str(file)]
-    raise SystemExit(subprocess.call(args))
+    rerun = shutil.which("rerun")
+    args = [rerun] if rerun else [sys.executable, "-m", "rerun"]
+    raise SystemExit(subprocess.call([*args, *map(str, files)]))
 
 
 if __name__ == "__main__":

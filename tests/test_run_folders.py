@@ -1,0 +1,214 @@
+"""Run folders under failure: bad input, signals, a second process, resuming, recordings."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rerun.chunk as rc
+from cli_helpers import cli_process, run_cli, wait_for
+
+import pursuit_bench
+from pursuit_bench import runs
+from pursuit_bench.evaluate import evaluate_agents
+from pursuit_bench.recording import TRAIL_ROWS_PER_CHUNK, EpisodeTrace, Recorder
+
+TINY = ["--num-envs", "4", "--learning-starts", "32", "--batch-size", "16", "--checkpoint-every", "5"]
+
+
+def train_tiny(out: Path, *extra: str, episodes: int = 10) -> str:
+    code, output = run_cli(
+        "train", "--condition", "1p-low", "--out", str(out), "--episodes", str(episodes), *TINY, *extra
+    )
+    assert code == 0, output
+    return output
+
+
+def recording_ids(path: Path) -> set[str]:
+    return {entry.recording_id for entry in rc.RrdReader(path).recordings()}
+
+
+def test_a_negative_seed_is_one_line_and_leaves_no_folder(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    code, output = run_cli("train", "--seed", "-1", "--out", str(out))
+    assert code == 2 and "-1 is not in the range x>=0" in output and "Traceback" not in output
+    assert not out.exists()
+    code, output = run_cli("eval", str(out), "--seed", "-3")
+    assert code == 2 and "-3 is not in the range" in output
+
+
+def test_a_failure_before_the_first_checkpoint_leaves_no_folder(tmp_path: Path, monkeypatch) -> None:
+    def broken(*args, **kwargs):
+        raise RuntimeError("the arenas could not be built")
+
+    monkeypatch.setattr("pursuit_bench.train.Trainer.__init__", broken)
+    out = tmp_path / "run"
+    code, _ = run_cli("train", "--condition", "1p-low", "--out", str(out), *TINY)
+    assert code == 1 and not out.exists()
+
+
+def test_a_run_that_never_reached_a_checkpoint_is_taken_by_a_rerun_or_a_resume(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    train_tiny(out, "--no-record")
+    (out / "checkpoint.pt").unlink()  # as if killed before its first checkpoint
+    train_tiny(out, "--no-record", "--seed", "4")  # a plain re-run, another seed: accepted
+    assert runs.read_config(out)[0].seed == 4
+    (out / "checkpoint.pt").unlink()
+    code, output = run_cli("train", "--out", str(out), "--resume", "--no-record")
+    assert code == 0 and "no checkpoint yet" in output, output
+    assert len((out / "metrics.jsonl").read_text().splitlines()) == 10
+
+
+def test_resume_alone_takes_the_saved_configuration(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    train_tiny(out, "--record-every", "2", "--learning-rate", "0.0005", episodes=8)
+    before = json.loads((out / "config.json").read_text())
+    code, output = run_cli("train", "--out", str(out), "--resume")
+    assert code == 0 and "nothing to do" in output, output
+    assert json.loads((out / "config.json").read_text()) == before  # target kept, not the preset's
+    assert sorted(p.name for p in out.glob("*.rrd")) == ["train.rrd"]  # no empty piece
+
+    code, output = run_cli("train", "--out", str(out), "--resume", "--learning-rate", "0.001")
+    assert code == 2 and "--learning-rate 0.001 disagrees with the run's 0.0005" in output, output
+    code, output = run_cli("train", "--out", str(out), "--resume", "--condition", "1p-high")
+    assert code == 2 and "--condition 1p-high disagrees with the run's 1p-low" in output
+
+    code, output = run_cli("train", "--out", str(out), "--resume", "--episodes", "14", "--learning-rate", "0.0005")
+    assert code == 0 and "extending the run from 8 to 14 episodes" in output, output
+    assert runs.read_config(out)[0].episodes == 14
+    rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
+    assert [r["episode"] for r in rows] == list(range(1, 15))
+    pieces = runs.recordings(out)
+    assert [p.name for p in pieces] == ["train.rrd", "train.resume1.rrd"]
+    assert len(recording_ids(pieces[0]) | recording_ids(pieces[1])) == 1  # one recording in two files
+
+
+def test_sigterm_during_training_checkpoints_and_exits_143(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    process = cli_process("train", "--condition", "1p-low", "--out", str(out), "--episodes", "100000")
+    wait_for(out / "metrics.jsonl")
+    time.sleep(2.0)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 143, stderr
+    assert "SIGTERM: stopped at episode" in stderr and "Traceback" not in stderr
+    done = runs.load_checkpoint(out)["episodes_done"]
+    assert done == len((out / "metrics.jsonl").read_text().splitlines())
+    verify = subprocess.run(
+        [sys.executable, "-m", "rerun", "rrd", "verify", str(out / "train.rrd")], capture_output=True
+    )
+    assert verify.returncode == 0, verify.stderr
+
+
+def test_a_second_process_cannot_use_a_busy_folder(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    train_tiny(out, "--no-record")
+    config = (out / "config.json").read_bytes()
+    with runs.locked(out):  # as a running `train` holds it
+        code, output = run_cli("train", "--condition", "1p-low", "--out", str(out), "--force", "--seed", "9", *TINY)
+        assert code == 2 and "in use by another pursuit-bench process" in output, output
+        assert len(output.strip().splitlines()) == 1
+        code, output = run_cli("eval", str(out), "--episodes", "4")
+        assert code == 2 and "in use" in output
+    assert (out / "config.json").read_bytes() == config
+    code, output = run_cli("eval", str(out), "--episodes", "4", "--no-record")
+    assert code == 0, output  # released
+
+
+def test_interrupted_eval_keeps_the_previous_results_and_tags_keep_apart(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    train_tiny(out, "--no-record")
+    code, output = run_cli("eval", str(out), "--episodes", "6", "--num-envs", "3")
+    assert code == 0, output
+    before = {name: (out / name).read_bytes() for name in ("eval.json", "eval.png", "eval.rrd")}
+
+    process = cli_process("eval", str(out), "--episodes", "1000000")
+    wait_for(out / ".eval.rrd.tmp")
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert "keeps its previous results" in stderr and "Aborted" not in stderr
+    assert {name: (out / name).read_bytes() for name in before} == before
+    assert not list(out.glob(".*.tmp"))
+
+    code, output = run_cli("eval", str(out), "--episodes", "5", "--num-envs", "5", "--seed", "7", "--tag", "seed7")
+    assert code == 0, output
+    assert json.loads((out / "eval-seed7.json").read_text())["seed"] == 7
+    assert (out / "eval-seed7.png").exists() and (out / "eval-seed7.rrd").exists()
+    assert {name: (out / name).read_bytes() for name in before} == before
+    code, output = run_cli("eval", str(out), "--tag", "../x")
+    assert code == 2 and "tag='../x'" in output
+
+
+def test_a_flat_or_scripted_predator_is_named_by_its_kind(tmp_path: Path) -> None:
+    for kind in ("flat", "always_stalk"):
+        out = tmp_path / kind
+        train_tiny(out, "--no-record", "--predator", kind)
+        code, output = run_cli("eval", str(out), "--episodes", "4", "--num-envs", "4", "--no-record")
+        assert code == 0 and f"predator_0: {kind} " in output and "hierarchical" not in output, output
+        result = json.loads((out / "eval.json").read_text())
+        assert result["predator_kind"] == kind and set(result["panels"][0]) == {
+            "predator",
+            "trained",
+            "always_chase",
+            "always_stalk",
+        }
+
+
+def test_view_opens_a_folder_and_refuses_what_is_not_a_recording(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    out = tmp_path / "run"
+    train_tiny(out)
+    code, output = run_cli("view", str(out / "config.json"))
+    assert code == 2 and "not a Rerun recording" in output
+    code, output = run_cli("view", str(out))
+    assert code == 1 and str(out / "train.rrd") in output and "no display" in output
+
+
+def test_load_agents_returns_a_runs_agents_ready_to_act_and_evaluate(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    train_tiny(out, "--no-record")
+    agents = pursuit_bench.load_agents(out)
+    assert list(agents) == ["predator_0", "prey_0"]
+    env = pursuit_bench.parallel_env("1p-low")
+    obs, _ = env.reset(seed=0)
+    actions = {name: agents[name].act(obs[name]) for name in env.agents}
+    env.step(actions)
+    result = evaluate_agents("1p-low", agents, episodes=4, seed=0, num_envs=4)  # type: ignore[arg-type]
+    assert result["predator_kind"] == "hierarchical" and len(result["panels"]) == 1
+    assert pursuit_bench.VectorPursuitEnv(2, "1p-low").num_envs == 2
+
+
+def test_trails_go_out_in_small_chunks(tmp_path: Path) -> None:
+    """One chunk of thousands of trail rows made `rerun rrd verify` take minutes."""
+    path = tmp_path / "x.rrd"
+    rng = np.random.default_rng(0)
+    with Recorder(path, ["predator_0", "prey_0"], {"condition": "1p-low"}) as recorder:
+        for episode in range(1, 41):
+            steps = int(rng.integers(20, 60))
+            trace = EpisodeTrace(
+                positions=rng.uniform(-0.9, 0.9, (steps + 1, 2, 2)),
+                modes=np.zeros((steps, 1), dtype=np.int64),
+                rewards=np.zeros((steps, 2)),
+                wall=np.zeros((steps, 2), dtype=bool),
+                captured=np.zeros((steps, 1), dtype=bool),
+                truncated=True,
+            )
+            recorder.log_episode(episode, trace)
+    sizes = [c.num_rows for c in rc.RrdReader(path).store().stream() if "trails/" in str(c.entity_path)]
+    assert sum(sizes) > 1000 and max(sizes) <= TRAIL_ROWS_PER_CHUNK
+
+
+@pytest.mark.parametrize("command", [["--help"], ["conditions"], ["train", "--condition", "9p"]])
+def test_the_cli_starts_without_torch_or_rerun(command: list[str]) -> None:
+    code = "import sys; from pursuit_bench.cli.main import main\n"
+    code += f"try:\n    main({command!r})\nexcept SystemExit:\n    pass\n"
+    code += "print(sorted({'torch', 'rerun'} & set(sys.modules)))"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.stdout.strip().splitlines()[-1] == "[]", result.stdout + result.stderr
