@@ -140,7 +140,7 @@ def load_agents(folder: str | os.PathLike[str]) -> dict[str, LearningAgent | Scr
     folder = Path(folder)
     config, _ = read_config(folder)
     state = load_checkpoint(folder)
-    _, agents = build_agents(config, obs_size(len(CONDITIONS[config.condition].agent_names)))
+    _, (agents,) = build_agents([config], [obs_size(len(CONDITIONS[config.condition].agent_names))])
     load_agents_state(agents, state, config.condition)
     return agents
 

@@ -1,14 +1,24 @@
-"""Training: every agent of a condition learns at once, each an independent learner, in B arenas.
+"""Training: every agent of a condition learns at once, each an independent learner, in B
+arenas; and K such runs trained as one.
+
+A *run* is one :class:`TrainConfig`. It owns its batched env, its agents, their replays, its
+counters and its random streams. Learners of the same shape and hyper-parameters, within a run
+and across runs, are stacked as the members of one :class:`DQNLearner`, so K runs cost one
+forward pass and one update per group instead of K. A member's random streams (network
+initialisation, exploration, replay sampling) come from its run's seed and its agent, and a
+run's arenas from its seed, so what a run learns does not depend on its companions.
 
 The loop, top to bottom (:meth:`Trainer.step`): act (one forward pass per group of learners) →
-step the batched env → store each agent's transition → update → count finished episodes.
+step every run's env → store each agent's transition → update → count finished episodes.
+A run that reaches its episode budget is finished: its episodes are no longer counted or
+reported while its companions go on (its arenas keep stepping, its outputs unused).
 The CLI parses options into a :class:`TrainConfig` and calls :class:`Trainer`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -41,15 +51,16 @@ class TrainConfig:
     num_envs: int = 8
     """Arenas stepped together. Every arena-step is one transition for every agent."""
     seed: int = 0
-    """Seeds the arenas, every network's initialisation and every learner's sampling."""
+    """Seeds the arenas, and with each agent's index its network's initialisation, its
+    exploration and its replay sampling."""
     predator: PredatorKind = "hierarchical"
     """What the predators are: the paper's hierarchical agent, the flat ablation, or a scripted
     baseline (which does not learn)."""
     prey: PreyKind = "learning"
     """A learning prey (the paper) or the scripted fleeing prey."""
     batched_learners: bool = True
-    """Stack the predators' learners into one batched computation (same mathematics as
-    separate updates, faster); False updates them one by one."""
+    """Stack the predators' learners into one batched computation, and with other runs' (the
+    same results as separate updates, faster); False updates them one by one."""
     backend: Backend = "pymunk"
     """Physics backend of the arenas."""
 
@@ -81,13 +92,20 @@ class TrainConfig:
         return cls(**{**data, "agent": agent})
 
 
+def member_seed(run_seed: int, agent: int) -> int:
+    """The seed of agent ``agent``'s learner in a run seeded ``run_seed``."""
+    return int(np.random.SeedSequence([run_seed, agent]).generate_state(1)[0])
+
+
 @dataclass
 class Group:
-    """Agents that share one (stacked) learner: member m is ``agents[m]`` at env index ``indices[m]``."""
+    """Agents that share one (stacked) learner: member m is ``agents[m]``, agent ``indices[m]``
+    of run ``runs[m]``."""
 
     learner: DQNLearner
     agents: list[LearningAgent]
     indices: list[int]
+    runs: list[int]
 
 
 @dataclass
@@ -109,33 +127,49 @@ class EpisodeRecord:
         return row
 
 
-def build_agents(config: TrainConfig, n_obs: int) -> tuple[list[Group], dict[str, LearningAgent | ScriptedAgent]]:
-    """The learner groups and every agent by name, for a condition."""
-    names = list(CONDITIONS[config.condition].agent_names)
-    predators, prey = names[:-1], names[-1]
-    groups: list[Group] = []
-    agents: dict[str, LearningAgent | ScriptedAgent] = {}
-
-    def add_group(kind: type[LearningAgent], members: list[str]) -> None:
+def build_agents(
+    configs: Sequence[TrainConfig], n_obs: Sequence[int]
+) -> tuple[list[Group], list[dict[str, LearningAgent | ScriptedAgent]]]:
+    """The learner groups over all runs, and every run's agents by name. Learners stack when
+    their kind, observation size, hyper-parameters and arena count agree (and the run allows it)."""
+    plans: dict[tuple, list[tuple[int, int, str]]] = {}  # group key -> members (run, agent index, name)
+    kinds: dict[tuple, type[LearningAgent]] = {}
+    runs_agents: list[dict[str, LearningAgent | ScriptedAgent]] = []
+    for r, config in enumerate(configs):
+        names = list(CONDITIONS[config.condition].agent_names)
+        predators, prey = names[:-1], names[-1]
+        agents: dict[str, LearningAgent | ScriptedAgent] = {}
+        learning: list[tuple[type[LearningAgent], str]] = []
+        if config.predator in KINDS:
+            learning += [(KINDS[config.predator], p) for p in predators]
+        else:
+            policy = AlwaysChase() if config.predator == "always_chase" else AlwaysStalk()
+            agents.update({p: ScriptedAgent(p, policy) for p in predators})
+        if config.prey == "learning":
+            learning.append((KINDS["prey"], prey))
+        else:
+            agents[prey] = ScriptedAgent(prey, FleeingPrey())
+        for kind, name in learning:
+            alone = () if config.batched_learners or kind.kind == "prey" else (r, name)
+            key = (kind.kind, n_obs[r], config.agent, config.num_envs, *alone)
+            kinds[key] = kind
+            plans.setdefault(key, []).append((r, names.index(name), name))
+        runs_agents.append(agents)
+    groups = []
+    for key, members in plans.items():
+        seeds = [member_seed(configs[r].seed, i) for r, i, _ in members]
         learner = DQNLearner(
-            n_obs, kind.n_actions, config.agent, members=len(members), seed=config.seed * 1000 + len(groups)
+            key[1], kinds[key].n_actions, configs[members[0][0]].agent, members=len(members), seed=seeds
         )
-        group = Group(learner, [kind(a, learner, m) for m, a in enumerate(members)], [names.index(a) for a in members])
-        groups.append(group)
-        agents.update({a.name: a for a in group.agents})
-
-    if config.predator in KINDS:
-        kind = KINDS[config.predator]
-        for members in [predators] if config.batched_learners else [[p] for p in predators]:
-            add_group(kind, members)
-    else:
-        policy = AlwaysChase() if config.predator == "always_chase" else AlwaysStalk()
-        agents.update({p: ScriptedAgent(p, policy) for p in predators})
-    if config.prey == "learning":
-        add_group(KINDS["prey"], [prey])
-    else:
-        agents[prey] = ScriptedAgent(prey, FleeingPrey())
-    return groups, {a: agents[a] for a in names}
+        made = [kinds[key](name, learner, m) for m, (_, _, name) in enumerate(members)]
+        groups.append(Group(learner, made, [i for _, i, _ in members], [r for r, _, _ in members]))
+        for (r, _, name), agent in zip(members, made, strict=True):
+            runs_agents[r][name] = agent
+    ordered = [
+        {a: agents[a] for a in CONDITIONS[c.condition].agent_names}
+        for c, agents in zip(configs, runs_agents, strict=True)
+    ]
+    return groups, ordered
 
 
 def load_agents_state(agents: dict[str, LearningAgent | ScriptedAgent], state: dict[str, Any], condition: str) -> None:
@@ -147,127 +181,65 @@ def load_agents_state(agents: dict[str, LearningAgent | ScriptedAgent], state: d
         load_agent_state(agent, state["agents"][name], condition)
 
 
-class Trainer:
-    """Runs :class:`TrainConfig`; ``on_episode`` is called with each finished episode. With a
-    ``recorder``, every ``record_every``-th episode (and the first) goes into it, and every
-    episode's metrics; without one, no Rerun call is made."""
+class Run:
+    """One run inside a :class:`Trainer`: its env, agents, counters and what it reports."""
 
     def __init__(
         self,
         config: TrainConfig,
-        on_episode: Callable[[EpisodeRecord], None] | None = None,
-        *,
-        recorder: Recorder | None = None,
-        record_every: int = 100,
+        on_episode: Callable[[EpisodeRecord], None] | None,
+        recorder: Recorder | None,
+        record_every: int,
     ) -> None:
         if isinstance(record_every, bool) or not isinstance(record_every, int) or record_every < 1:
             raise ValueError(f"record_every={record_every!r}: expected an integer >= 1")
-        self.config = config
+        self.config, self.on_episode = config, on_episode
         self.recorder, self.record_every = recorder, record_every
         self.env = VectorPursuitEnv(config.num_envs, config.condition, backend=config.backend)
-        self.groups, self.agents = build_agents(config, self.env.obs_size)
-        self.on_episode = on_episode
         self.names = self.env.agents
         self.n_predators = len(self.names) - 1
+        self.agents: dict[str, LearningAgent | ScriptedAgent] = {}
+        self.learner: DQNLearner | None = None  # whose ε and β the metrics show
         self.episodes_done = 0
         self.env_steps = 0
         self.last_losses: dict[str, float] = {}
+        self.final_state: dict[str, Any] | None = None
         self.obs, _ = self.env.reset(seed=config.seed)
-        self._chase_steps = np.zeros((config.num_envs, self.n_predators))
-        self._traces = (
+        self.chase_steps = np.zeros((config.num_envs, self.n_predators))
+        self.traces = (
             EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps) if recorder is not None else None
         )
+        self.q_values = np.full((config.num_envs, self.n_predators, 2), np.nan)  # for recordings
+        self.values = np.full((config.num_envs, self.n_predators), np.nan)
 
-    def state_dict(self) -> dict[str, Any]:
-        """Everything a resumed run needs: every learning agent and the counters."""
-        return {
-            "episodes_done": self.episodes_done,
-            "env_steps": self.env_steps,
-            "recording_clock": self.recorder.clock if self.recorder is not None else 0,
-            "config": self.config.to_dict(),
-            "agents": {
-                a.name: agent_state(a, self.config.condition)
-                for a in self.agents.values()
-                if isinstance(a, LearningAgent)
-            },
-        }
+    @property
+    def finished(self) -> bool:
+        return self.episodes_done >= self.config.episodes
 
-    def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore from :meth:`state_dict`. Episodes under way when it was taken are not resumed:
-        every arena starts afresh, from a seed derived from the run's seed and the episode count."""
-        load_agents_state(self.agents, state, self.config.condition)
-        self.episodes_done, self.env_steps = int(state["episodes_done"]), int(state["env_steps"])
-        self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
-        self._chase_steps[:] = 0.0
-        if self._traces is not None:
-            self._traces = EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps)
-        if self.recorder is not None:  # a resumed piece of the recording plays on after the last
-            self.recorder.clock = max(self.recorder.clock, int(state.get("recording_clock", 0)))
-
-    def run(self, should_stop: Callable[[], bool] = lambda: False) -> None:
-        """Step until the configured number of episodes has finished (or ``should_stop()``)."""
-        while self.episodes_done < self.config.episodes and not should_stop():
-            self.step()
-
-    def step(self) -> None:
-        """One step of every arena: act, step, store, update, count episodes."""
-        obs = self.obs
-        actions = np.zeros((self.config.num_envs, len(self.names), 2), dtype=np.int64)
-        choices = []
-        q_values = np.full((self.config.num_envs, self.n_predators, 2), np.nan)  # for recordings
-        values = np.full((self.config.num_envs, self.n_predators), np.nan)
-        for group in self.groups:  # one forward pass per group
-            group_obs = obs[:, group.indices].transpose(1, 0, 2)  # (M, B, n_obs)
-            q, v = group.learner.evaluate(group_obs)
-            chosen = group.learner.choose(q, explore=True)
-            choices.append(chosen)
-            for m, (agent, i) in enumerate(zip(group.agents, group.indices, strict=True)):
-                put_actions(actions, i, agent.to_env(chosen[m], obs[:, i]))
-                if agent.kind == "hierarchical":
-                    q_values[:, i], values[:, i] = q[m], v[m]
-        for i, name in enumerate(self.names):
-            scripted = self.agents[name]
-            if isinstance(scripted, ScriptedAgent):
-                put_actions(actions, i, scripted.act_batch(obs[:, i]))
-
-        next_obs, rewards, terminated, truncated, info = self.env.step(actions)
-        done = info["done"]
-        real_next = np.where(done[:, None, None], info["final_observation"], next_obs)
-        for group, chosen in zip(self.groups, choices, strict=True):
-            idx = group.indices
-            group.learner.store(
-                obs[:, idx].transpose(1, 0, 2),
-                chosen,
-                rewards[:, idx].T,
-                real_next[:, idx].transpose(1, 0, 2),
-                terminated[:, idx].T,
-            )
-            losses = group.learner.train()
-            if losses is not None:
-                self.last_losses.update({a.name: float(loss) for a, loss in zip(group.agents, losses, strict=True)})
-
-        self._chase_steps += actions[:, :-1, 0]
+    def after_step(self, actions: np.ndarray, step: tuple[np.ndarray, ...], info: dict[str, Any]) -> None:
+        """Count the step, trace it, and report the episodes it ended."""
+        next_obs, rewards, _, truncated = step
+        self.chase_steps += actions[:, :-1, 0]
         self.env_steps += 1
-        if self._traces is not None:
-            self._traces.add_step(actions, rewards, info, q_values, values)
-        for arena in np.flatnonzero(done):
+        if self.traces is not None:
+            self.traces.add_step(actions, rewards, info, self.q_values, self.values)
+        for arena in np.flatnonzero(info["done"]):
             self._finish_episode(int(arena), info, bool(truncated[arena, 0]))
         self.obs = next_obs
 
     def _finish_episode(self, arena: int, info: dict[str, Any], truncated: bool) -> None:
         length = int(info["episode_length"][arena])
-        chase = self._chase_steps[arena] / length
-        self._chase_steps[arena] = 0.0
+        chase = self.chase_steps[arena] / length
+        self.chase_steps[arena] = 0.0
         trace = None
-        if self._traces is not None:
-            trace = self._traces.finish(arena, truncated, self.env.core.world.positions[arena])
-        if self.episodes_done >= self.config.episodes:
-            return  # arenas finishing on the last step beyond the budget are not counted
+        if self.traces is not None:
+            trace = self.traces.finish(arena, truncated, self.env.core.world.positions[arena])
+        if self.finished:
+            return  # arenas finishing beyond the budget are not counted
         self.episodes_done += 1
         extra: dict[str, float] = {f"loss/{a}": loss for a, loss in self.last_losses.items()}
-        if self.groups:
-            learner = self.groups[0].learner
-            extra.update({"epsilon": learner.epsilon, "beta": learner.beta})
+        if self.learner is not None:
+            extra.update({"epsilon": self.learner.epsilon, "beta": self.learner.beta})
         record = EpisodeRecord(
             episode=self.episodes_done,
             length=length,
@@ -283,5 +255,160 @@ class Trainer:
             metrics.update({"length": float(length), "captured": float(record.captured), **extra})
             metrics.update({f"chase_fraction/{a}": f for a, f in record.chase_fraction.items()})
             self.recorder.log_metrics(self.episodes_done, metrics)
+        if self.finished:  # its learners' members may go on beside companions: keep this state
+            self.final_state = self._state_now()
         if self.on_episode is not None:
             self.on_episode(record)
+
+    def state_dict(self) -> dict[str, Any]:
+        """The run's checkpoint: as it is, or as it was when the run finished."""
+        return self.final_state if self.final_state is not None else self._state_now()
+
+    def _state_now(self) -> dict[str, Any]:
+        return {
+            "episodes_done": self.episodes_done,
+            "env_steps": self.env_steps,
+            "recording_clock": self.recorder.clock if self.recorder is not None else 0,
+            "config": self.config.to_dict(),
+            "agents": {
+                a.name: agent_state(a, self.config.condition)
+                for a in self.agents.values()
+                if isinstance(a, LearningAgent)
+            },
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        load_agents_state(self.agents, state, self.config.condition)
+        self.episodes_done, self.env_steps = int(state["episodes_done"]), int(state["env_steps"])
+        self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
+        self.chase_steps[:] = 0.0
+        if self.traces is not None:
+            self.traces = EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps)
+        if self.recorder is not None:  # a resumed piece of the recording plays on after the last
+            self.recorder.clock = max(self.recorder.clock, int(state.get("recording_clock", 0)))
+
+
+def _per_run(value: Any, k: int, what: str) -> list[Any]:
+    """``value`` for each of k runs: a list of k, or one value (for k = 1, or None for all)."""
+    if isinstance(value, (list, tuple)):
+        if len(value) != k:
+            raise ValueError(f"{what}: expected one per run ({k}), got {len(value)}")
+        return list(value)
+    if value is not None and k > 1:
+        raise ValueError(f"{what}: expected a list of one per run ({k})")
+    return [value] * k
+
+
+class Trainer:
+    """Trains K runs as one: ``config`` is one :class:`TrainConfig` or a list. ``on_episode``
+    (one callback, or one per run) is called with each finished episode of its run. With a
+    ``recorder`` (one per run), every ``record_every``-th episode of that run (one number, or
+    one per run; and its first episode) goes into it, and every episode's metrics; without
+    one, no Rerun call is made.
+
+    ``agents``, ``episodes_done``, ``env``, ``state_dict`` and ``load_state_dict`` speak of
+    run 0, the only one when K = 1; ``runs[r]`` holds run r."""
+
+    def __init__(
+        self,
+        config: TrainConfig | Sequence[TrainConfig],
+        on_episode: Callable[[EpisodeRecord], None] | Sequence[Callable[[EpisodeRecord], None] | None] | None = None,
+        *,
+        recorder: Recorder | Sequence[Recorder | None] | None = None,
+        record_every: int | Sequence[int] = 100,
+    ) -> None:
+        configs = [config] if isinstance(config, TrainConfig) else list(config)
+        if not configs:
+            raise ValueError("config: expected at least one run")
+        k = len(configs)
+        callbacks, recorders = _per_run(on_episode, k, "on_episode"), _per_run(recorder, k, "recorder")
+        every = _per_run(record_every, k, "record_every") if not isinstance(record_every, int) else [record_every] * k
+        self.runs = [Run(*run) for run in zip(configs, callbacks, recorders, every, strict=True)]
+        self.groups, agents = build_agents(configs, [run.env.obs_size for run in self.runs])
+        for run, run_agents in zip(self.runs, agents, strict=True):
+            run.agents = run_agents
+        for group in self.groups:
+            for r in group.runs:
+                self.runs[r].learner = self.runs[r].learner or group.learner
+
+    @property
+    def config(self) -> TrainConfig:
+        return self.runs[0].config
+
+    @property
+    def env(self) -> VectorPursuitEnv:
+        return self.runs[0].env
+
+    @property
+    def agents(self) -> dict[str, LearningAgent | ScriptedAgent]:
+        return self.runs[0].agents
+
+    @property
+    def episodes_done(self) -> int:
+        return self.runs[0].episodes_done
+
+    @property
+    def finished(self) -> bool:
+        return all(run.finished for run in self.runs)
+
+    def state_dict(self, run: int = 0) -> dict[str, Any]:
+        """Everything a resumed run needs: its learning agents and its counters."""
+        return self.runs[run].state_dict()
+
+    def load_state_dict(self, state: dict[str, Any], run: int = 0) -> None:
+        """Restore run ``run`` from :meth:`state_dict`. Episodes under way when it was taken are
+        not resumed: every arena starts afresh, from a seed derived from the run's seed and the
+        episode count. Runs stacked together move in lockstep: all must be restored from the
+        same number of env steps (ValueError otherwise, once all are loaded: see
+        :meth:`check_lockstep`)."""
+        self.runs[run].load_state_dict(state)
+
+    def check_lockstep(self) -> None:
+        """ValueError unless the runs of every group have taken the same number of env steps."""
+        for group in self.groups:
+            steps = {self.runs[r].env_steps for r in group.runs}
+            if len(steps) > 1:
+                raise ValueError(f"runs stacked together must resume from the same env step, got {sorted(steps)}")
+
+    def run(self, should_stop: Callable[[], bool] = lambda: False) -> None:
+        """Step until every run has finished its episodes (or ``should_stop()``)."""
+        while not self.finished and not should_stop():
+            self.step()
+
+    def step(self) -> None:
+        """One step of every arena of every run: act, step, store, update, count episodes."""
+        actions = [np.zeros((run.config.num_envs, len(run.names), 2), dtype=np.int64) for run in self.runs]
+        decided = []
+        for group in self.groups:  # one forward pass per group, all its runs at once
+            obs = np.stack([self.runs[r].obs[:, i] for r, i in zip(group.runs, group.indices, strict=True)])
+            q, v = group.learner.evaluate(obs)
+            chosen = group.learner.choose(q, explore=True)
+            decided.append((obs, chosen))
+            for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):
+                put_actions(actions[r], i, agent.to_env(chosen[m], obs[m]))
+                if agent.kind == "hierarchical":
+                    self.runs[r].q_values[:, i], self.runs[r].values[:, i] = q[m], v[m]
+        for run, run_actions in zip(self.runs, actions, strict=True):
+            for i, name in enumerate(run.names):
+                scripted = run.agents[name]
+                if isinstance(scripted, ScriptedAgent):
+                    put_actions(run_actions, i, scripted.act_batch(run.obs[:, i]))
+
+        steps = [run.env.step(run_actions) for run, run_actions in zip(self.runs, actions, strict=True)]
+        for group, (obs, chosen) in zip(self.groups, decided, strict=True):
+            rows = []
+            for r, i in zip(group.runs, group.indices, strict=True):
+                next_obs, rewards, terminated, _, info = steps[r]
+                real_next = np.where(info["done"][:, None], info["final_observation"][:, i], next_obs[:, i])
+                rows.append((rewards[:, i], real_next, terminated[:, i]))
+            rewards_m, next_m, terminated_m = (np.stack(column) for column in zip(*rows, strict=True))
+            group.learner.store(obs, chosen, rewards_m, next_m, terminated_m)
+            losses = group.learner.train()
+            if losses is not None:
+                for agent, r, loss in zip(group.agents, group.runs, losses, strict=True):
+                    self.runs[r].last_losses[agent.name] = float(loss)
+
+        for run, run_actions, (next_obs, rewards, terminated, truncated, info) in zip(
+            self.runs, actions, steps, strict=True
+        ):
+            run.after_step(run_actions, (next_obs, rewards, terminated, truncated), info)

@@ -10,6 +10,7 @@ learner with M members therefore makes exactly the updates of M learners with on
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -17,7 +18,7 @@ import torch
 import torch.nn.functional as F
 
 from pursuit_bench.agents.config import AgentConfig
-from pursuit_bench.agents.network import DuelingQNetwork
+from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, PrioritizedReplay
 
 
@@ -41,15 +42,27 @@ def double_dqn_targets(
 
 
 class DQNLearner:
-    """M independent double-DQN learners. Arrays passed in and out have the member axis first."""
+    """M independent double-DQN learners. Arrays passed in and out have the member axis first.
 
-    def __init__(self, n_obs: int, n_actions: int, config: AgentConfig, *, members: int = 1, seed: int = 0) -> None:
+    ``seed`` is one seed per member (or one from which they are derived): member m's network
+    initialisation, exploration and replay sampling draw from its own seed only, so a member
+    learns the same whether it is alone or stacked beside others, wherever it sits. The
+    counters (transitions stored, updates, target copies) are shared: members move in lockstep.
+    """
+
+    def __init__(
+        self, n_obs: int, n_actions: int, config: AgentConfig, *, members: int = 1, seed: int | Sequence[int] = 0
+    ) -> None:
         self.config, self.members, self.n_obs, self.n_actions = config, members, n_obs, n_actions
-        self.online = DuelingQNetwork(n_obs, n_actions, members=members, seed=seed)
-        self.target = DuelingQNetwork(n_obs, n_actions, members=members, seed=seed)
+        seeds = member_seeds(seed, members)
+        self.online = DuelingQNetwork(n_obs, n_actions, members=members, seed=seeds)
+        self.target = DuelingQNetwork(n_obs, n_actions, members=members, seed=seeds)
         self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
         self.target.requires_grad_(False)
-        self.optimizer = torch.optim.Adam(self.online.parameters(), lr=config.learning_rate, fused=True)
+        # Plain (per-tensor) Adam: torch's fused kernel rounds an element differently depending
+        # on where it falls in its vectorised loop, so a member's weights would depend on its
+        # place in the stack; the plain and foreach kernels have no such dependence (tested).
+        self.optimizer = torch.optim.Adam(self.online.parameters(), lr=config.learning_rate, foreach=False)
         self.replays = [
             PrioritizedReplay(
                 config.buffer_size,
@@ -60,7 +73,7 @@ class DQNLearner:
             )
             for _ in range(members)
         ]
-        self.rng = np.random.default_rng(seed)  # exploration and replay sampling
+        self.rngs = [np.random.default_rng(s) for s in seeds]  # exploration and replay sampling
         self.steps = 0  # transitions stored per member
         self.updates = 0
         self._owed_updates = 0.0  # replay_ratio × transitions, not yet done
@@ -89,8 +102,10 @@ class DQNLearner:
         unless ``epsilon`` is given)."""
         actions = q_values.argmax(axis=-1)
         if explore:
-            random = self.rng.random(actions.shape) < (self.epsilon if epsilon is None else epsilon)
-            actions = np.where(random, self.rng.integers(0, self.n_actions, size=actions.shape), actions)
+            eps = self.epsilon if epsilon is None else epsilon
+            for m, rng in enumerate(self.rngs):
+                random = rng.random(actions.shape[1:]) < eps
+                actions[m] = np.where(random, rng.integers(0, self.n_actions, size=actions.shape[1:]), actions[m])
         return actions
 
     def act(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
@@ -122,7 +137,8 @@ class DQNLearner:
 
     def update(self) -> np.ndarray:
         """One gradient step for every member on its own prioritized batch; losses (M,)."""
-        return self.learn([replay.sample(self.config.batch_size, self.beta, self.rng) for replay in self.replays])
+        beta, size = self.beta, self.config.batch_size
+        return self.learn([replay.sample(size, beta, rng) for replay, rng in zip(self.replays, self.rngs, strict=True)])
 
     def learn(self, batches: list[Batch]) -> np.ndarray:
         """One gradient step on the given batches (one per member), then their new priorities."""
@@ -169,7 +185,7 @@ class DQNLearner:
             "updates": self.updates,
             "owed_updates": self._owed_updates,
             "next_target_copy": self._next_target_copy,
-            "rng": self.rng.bit_generator.state,
+            "rng": self.rngs[m].bit_generator.state,
         }
 
     def load_member_state(self, m: int, state: dict[str, Any]) -> None:
@@ -194,4 +210,4 @@ class DQNLearner:
         self.replays[m].load_state_dict(replay)
         self.steps, self.updates = int(state["steps"]), int(state["updates"])
         self._owed_updates, self._next_target_copy = float(state["owed_updates"]), int(state["next_target_copy"])
-        self.rng.bit_generator.state = state["rng"]
+        self.rngs[m].bit_generator.state = state["rng"]

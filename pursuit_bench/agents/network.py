@@ -9,7 +9,9 @@ separate: no gradient flows between members.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
+import numpy as np
 import torch
 from torch import nn
 
@@ -17,32 +19,53 @@ TRUNK = (64, 64)
 HEAD = 32
 
 
-class StackedLinear(nn.Module):
-    """M independent ``Linear(in, out)`` layers applied to (M, B, in) inputs."""
+def member_seeds(seed: int | Sequence[int], members: int) -> list[int]:
+    """One seed per member: the given ones, or ``members`` seeds derived from one."""
+    if isinstance(seed, int):
+        return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(members)]
+    if len(seed) != members:
+        raise ValueError(f"seed: expected one seed per member ({members}), got {len(seed)}")
+    return [int(s) for s in seed]
 
-    def __init__(self, members: int, n_in: int, n_out: int, generator: torch.Generator) -> None:
+
+class StackedLinear(nn.Module):
+    """M independent ``Linear(in, out)`` layers applied to (M, B, in) inputs; member m's
+    initial weights come from ``generators[m]`` alone."""
+
+    def __init__(self, n_in: int, n_out: int, generators: list[torch.Generator]) -> None:
         super().__init__()
         bound = 1.0 / math.sqrt(n_in)  # torch.nn.Linear's default initialisation, per member
-        self.weight = nn.Parameter(torch.empty(members, n_in, n_out).uniform_(-bound, bound, generator=generator))
-        self.bias = nn.Parameter(torch.empty(members, 1, n_out).uniform_(-bound, bound, generator=generator))
+
+        def draw(*shape: int) -> torch.Tensor:
+            return torch.stack([torch.empty(shape).uniform_(-bound, bound, generator=g) for g in generators])
+
+        self.weight = nn.Parameter(draw(n_in, n_out))
+        self.bias = nn.Parameter(draw(1, n_out))
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if self.weight.shape[-1] == 1:
+            # A one-output layer as a product and a sum: torch's batched matrix product takes
+            # another path (matrix-vector) for one member than for several, and its rounding
+            # would then depend on how many members are stacked.
+            return (x * self.weight.transpose(1, 2)).sum(dim=-1, keepdim=True) + self.bias
         return torch.baddbmm(self.bias, x, self.weight)
 
 
 class DuelingQNetwork(nn.Module):
-    """Dueling MLP for M members: ``forward`` maps (M, B, obs) to Q-values (M, B, A)."""
+    """Dueling MLP for M members: ``forward`` maps (M, B, obs) to Q-values (M, B, A). ``seed``:
+    one per member, or one from which the members' are derived; a member's initial weights
+    depend on its own seed only, not on its place in the stack or on M."""
 
-    def __init__(self, n_obs: int, n_actions: int, *, members: int = 1, seed: int = 0) -> None:
+    def __init__(self, n_obs: int, n_actions: int, *, members: int = 1, seed: int | Sequence[int] = 0) -> None:
         super().__init__()
-        generator = torch.Generator().manual_seed(seed)
+        generators = [torch.Generator().manual_seed(s) for s in member_seeds(seed, members)]
         self.n_obs, self.n_actions, self.members = n_obs, n_actions, members
-        self.trunk1 = StackedLinear(members, n_obs, TRUNK[0], generator)
-        self.trunk2 = StackedLinear(members, TRUNK[0], TRUNK[1], generator)
-        self.value1 = StackedLinear(members, TRUNK[1], HEAD, generator)
-        self.value2 = StackedLinear(members, HEAD, 1, generator)
-        self.advantage1 = StackedLinear(members, TRUNK[1], HEAD, generator)
-        self.advantage2 = StackedLinear(members, HEAD, n_actions, generator)
+        self.trunk1 = StackedLinear(n_obs, TRUNK[0], generators)
+        self.trunk2 = StackedLinear(TRUNK[0], TRUNK[1], generators)
+        self.value1 = StackedLinear(TRUNK[1], HEAD, generators)
+        self.value2 = StackedLinear(HEAD, 1, generators)
+        self.advantage1 = StackedLinear(TRUNK[1], HEAD, generators)
+        self.advantage2 = StackedLinear(HEAD, n_actions, generators)
 
     def streams(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """``(value_hidden, value, advantage)``: the value stream's last hidden layer (M, B, 32),

@@ -13,7 +13,6 @@ import ast
 import dataclasses
 import inspect
 import itertools
-import json
 import os
 import shutil
 import subprocess
@@ -338,75 +337,48 @@ def _train_run(
     record: bool,
     log_every: int,
 ) -> None:
-    """Train (the folder ready and locked) until done or a signal: checkpoints, metrics,
-    recording, progress."""
-    from pursuit_bench import runs
-    from pursuit_bench.recording import Recorder
-    from pursuit_bench.train import Trainer
+    """Train (the folder ready and locked) until done or a signal, showing progress."""
+    from pursuit_bench.stack import FolderRun, train_stack
 
-    done = int(state["episodes_done"]) if state else 0
-    if done >= config.episodes:
-        click.echo(f"{out}: already trained {done} of {config.episodes} episodes; nothing to do")
+    run = FolderRun(out, config, settings, state)
+    if run.episodes_done >= config.episodes:
+        click.echo(f"{out}: already trained {run.episodes_done} of {config.episodes} episodes; nothing to do")
         return
-    checkpoint_every = int(settings.get("checkpoint_every", 100))
+    if state is not None:
+        click.echo(f"resuming {out} at episode {run.episodes_done} of {config.episodes}", err=True)
     names = list(CONDITIONS[config.condition].agent_names)
-    recorder = None
-    if record:  # training records every Nth episode: send each at once
-        recorder = Recorder(
-            runs.recording_path(out),
-            names,
-            {"condition": config.condition, **config.to_dict(), **settings},
-            episodes_per_send=1,
-            recording_id=settings.get("recording_id") or str(out),
-        )
-    metrics = (out / runs.METRICS).open("a")
     returns: dict[str, list[float]] = {name: [] for name in names}
     captures: list[bool] = []
+    last: dict[str, Any] = {"done": run.episodes_done, "epsilon": 0.0}
 
-    def on_episode(record: EpisodeRecord) -> None:
-        metrics.write(json.dumps(record.as_row()) + "\n")
+    def on_episode(_: int, episode: EpisodeRecord) -> None:
         for name in names:
-            returns[name].append(record.returns[name])
-        captures.append(record.captured)
+            returns[name].append(episode.returns[name])
+        captures.append(episode.captured)
+        last.update(done=episode.episode, epsilon=episode.extra.get("epsilon", 0.0))
+        progress.update(episode.episode)
 
-    trainer = Trainer(config, on_episode, recorder=recorder, record_every=int(settings.get("record_every", 100)))
-    if state is not None:
-        trainer.load_state_dict(state)
-        click.echo(f"resuming {out} at episode {trainer.episodes_done} of {config.episodes}", err=True)
-    learner = trainer.groups[0].learner if trainer.groups else None  # its ε is shown
     progress = Progress(
         f"training {config.condition}",
         config.episodes,
-        trainer.episodes_done,
-        lambda: _describe(returns, captures, lambda: learner.epsilon if learner else 0.0),
+        run.episodes_done,
+        lambda: _describe(returns, captures, lambda: last["epsilon"]),
         every_episodes=log_every,
     )
-    next_checkpoint = (trainer.episodes_done // checkpoint_every + 1) * checkpoint_every
-    while trainer.episodes_done < config.episodes and signals.signum is None:
-        trainer.step()
-        progress.update(trainer.episodes_done)
-        if trainer.episodes_done >= next_checkpoint:
-            metrics.flush()
-            runs.save_checkpoint(out, trainer.state_dict())
-            next_checkpoint += checkpoint_every
+    train_stack([run], record=record, should_stop=lambda: signals.signum is not None, on_episode=on_episode)
     progress.close()
-    metrics.close()
-    runs.save_checkpoint(out, trainer.state_dict())
-    runs.keep_metrics(out, trainer.episodes_done)
-    if recorder is not None:
-        recorder.close()
     if signals.signum is not None:
         stopped = Stopped(signals.signum)
         click.echo(
-            f"\n{stopped}: stopped at episode {trainer.episodes_done}; checkpoint saved; "
+            f"\n{stopped}: stopped at episode {last['done']}; checkpoint saved; "
             f"continue with: pursuit-bench train --out {out} --resume",
             err=True,
         )
         sys.exit(stopped.exit_code)
-    click.echo(f"trained {trainer.episodes_done} episodes of {config.condition} into {out}/")
-    click.echo(f"  metrics: {out / runs.METRICS}   checkpoint: {out / runs.CHECKPOINT}")
-    if recorder is not None:
-        click.echo(f"  recording: {recorder.path}   (pursuit-bench view {out})")
+    click.echo(f"trained {last['done']} episodes of {config.condition} into {out}/")
+    click.echo(f"  metrics: {out / 'metrics.jsonl'}   checkpoint: {out / 'checkpoint.pt'}")
+    if record:
+        click.echo(f"  recordings: pursuit-bench view {out}")
 
 
 @main.command(name="eval")
@@ -454,49 +426,12 @@ def evaluate(
 def _evaluate_run(
     run: Path, paths: dict[str, Path], *, episodes: int, seed: int, num_envs: int, record: bool, tag: str | None
 ) -> None:
-    from pursuit_bench import runs
-    from pursuit_bench.evaluate import evaluate_agents
-    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.plots import reward_bars_png
-    from pursuit_bench.recording import Recorder
+    from pursuit_bench.stack import evaluate_folder
 
-    config, _ = runs.read_config(run)
-    agents = runs.load_agents(run)
-    state = runs.load_checkpoint(run)
-    names = list(CONDITIONS[config.condition].agent_names)
-    partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
-    recorder = None
     try:
         with SignalCatcher(raise_at_once=True).active():
-            if record:
-                described = {"condition": config.condition, "evaluation": True, **config.to_dict()}
-                recorder = Recorder(partial["rrd"], names, described)
-            result = evaluate_agents(
-                config.condition,
-                agents,  # type: ignore[arg-type]
-                episodes=episodes,
-                seed=seed,
-                prey_epsilon=0.1 if config.prey == "learning" else None,
-                num_envs=num_envs,
-                recorder=recorder,
-                backend=config.backend,
-                predator_kind=config.predator,
-            )
-            result.update({"trained_episodes": int(state["episodes_done"]), "tag": tag})
-            if recorder is not None:
-                recorder.close()
-            atomic_write_bytes(partial["png"], reward_bars_png(result))
-            atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
-            for kind in ("rrd", "png", "json"):  # eval.json last: it says the set is complete
-                if partial[kind].exists():
-                    os.replace(partial[kind], paths[kind])
-            if recorder is None:
-                paths["rrd"].unlink(missing_ok=True)  # an older recording would not match
+            result = evaluate_folder(run, episodes=episodes, seed=seed, num_envs=num_envs, record=record, tag=tag)
     except Stopped as stopped:
-        if recorder is not None:
-            recorder.close()
-        for path in partial.values():
-            path.unlink(missing_ok=True)
         click.echo(f"\n{stopped}: evaluation stopped; {run} keeps its previous results", err=True)
         sys.exit(stopped.exit_code)
     kind = result["predator_kind"]

@@ -1,0 +1,179 @@
+"""Run folders trained as one stack, and a run folder evaluated: what ``train``, ``eval`` and
+each worker of ``sweep`` do once they hold the folders' locks.
+
+A stack is K runs in one :class:`~pursuit_bench.train.Trainer`. Each run writes its own folder
+(``runs.py``): metrics as its episodes finish, a recording of every k-th episode, a checkpoint
+when it finishes. The unfinished runs are checkpointed together, so that a stack resumes as one.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pursuit_bench import runs
+from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.evaluate import evaluate_agents
+from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+from pursuit_bench.plots import reward_bars_png
+from pursuit_bench.recording import Recorder
+from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
+
+
+@dataclass
+class FolderRun:
+    """One run of a stack: its folder (prepared, config written, locked by the caller), its
+    configuration, its settings (``record_every``, ``checkpoint_every``, ``recording_id``) and
+    the checkpoint it resumes from (None: from the start)."""
+
+    folder: Path
+    config: TrainConfig
+    settings: dict[str, Any]
+    state: dict[str, Any] | None = None
+
+    @property
+    def episodes_done(self) -> int:
+        return int(self.state["episodes_done"]) if self.state else 0
+
+    @property
+    def env_steps(self) -> int:
+        return int(self.state["env_steps"]) if self.state else 0
+
+
+def train_stack(
+    stack: list[FolderRun],
+    *,
+    record: bool = True,
+    should_stop: Callable[[], bool] = lambda: False,
+    on_episode: Callable[[int, EpisodeRecord], None] | None = None,
+) -> bool:
+    """Train the runs of ``stack`` as one until each has its episodes, or until ``should_stop()``
+    (then every unfinished run is checkpointed). ``on_episode(k, record)`` hears each episode
+    of run k. Returns whether every run finished."""
+    todo = [r for r in stack if r.episodes_done < r.config.episodes]
+    if not todo:
+        return True
+    recorders: list[Recorder | None] = []
+    for r in todo:
+        recorder = None
+        if record:  # training records every Nth episode: send each at once
+            recorder = Recorder(
+                runs.recording_path(r.folder),
+                list(CONDITIONS[r.config.condition].agent_names),
+                {"condition": r.config.condition, **r.config.to_dict(), **r.settings},
+                episodes_per_send=1,
+                recording_id=r.settings.get("recording_id") or str(r.folder),
+            )
+        recorders.append(recorder)
+    metrics = [(r.folder / runs.METRICS).open("a") for r in todo]
+
+    def writer(k: int) -> Callable[[EpisodeRecord], None]:
+        def write(record: EpisodeRecord) -> None:
+            metrics[k].write(json.dumps(record.as_row()) + "\n")
+            if on_episode is not None:
+                on_episode(k, record)
+
+        return write
+
+    trainer = Trainer(
+        [r.config for r in todo],
+        [writer(k) for k in range(len(todo))],
+        recorder=recorders,
+        record_every=[int(r.settings.get("record_every", 100)) for r in todo],
+    )
+    for k, r in enumerate(todo):
+        if r.state is not None:
+            trainer.load_state_dict(r.state, run=k)
+    trainer.check_lockstep()
+    every = [int(r.settings.get("checkpoint_every", 100)) for r in todo]
+    next_checkpoint = [(run.episodes_done // e + 1) * e for run, e in zip(trainer.runs, every, strict=True)]
+    closed = [False] * len(todo)
+
+    def close(k: int) -> None:
+        """Checkpoint run k, trim its metrics to the checkpoint, finish its recording."""
+        metrics[k].close()
+        runs.save_checkpoint(todo[k].folder, trainer.state_dict(k))
+        runs.keep_metrics(todo[k].folder, trainer.runs[k].episodes_done)
+        if recorders[k] is not None:
+            recorders[k].close()  # type: ignore[union-attr]
+        closed[k] = True
+
+    try:
+        while not trainer.finished and not should_stop():
+            trainer.step()
+            due = False
+            for k, run in enumerate(trainer.runs):
+                if closed[k]:
+                    continue
+                if run.finished:
+                    close(k)
+                elif run.episodes_done >= next_checkpoint[k]:
+                    due = True
+            if due:  # every unfinished run at once: they resume together
+                for k, run in enumerate(trainer.runs):
+                    if not closed[k]:
+                        metrics[k].flush()
+                        runs.save_checkpoint(todo[k].folder, trainer.state_dict(k))
+                        next_checkpoint[k] = (run.episodes_done // every[k] + 1) * every[k]
+    finally:
+        for k in range(len(todo)):
+            if not closed[k]:
+                close(k)
+    return trainer.finished
+
+
+def evaluate_folder(
+    folder: Path,
+    *,
+    episodes: int,
+    seed: int,
+    num_envs: int = 64,
+    record: bool = True,
+    tag: str | None = None,
+) -> dict[str, Any]:
+    """Evaluate a trained run folder (its lock held by the caller) by the paper's protocol and
+    write ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*``) together: each is written
+    under a temporary name and renamed when all are complete, so an interruption leaves the
+    previous ones as they were. Returns the result."""
+    paths = runs.eval_paths(folder, tag)
+    config, _ = runs.read_config(folder)
+    agents = runs.load_agents(folder)
+    state = runs.load_checkpoint(folder)
+    partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
+    recorder = None
+    try:
+        if record:
+            described = {"condition": config.condition, "evaluation": True, **config.to_dict()}
+            recorder = Recorder(partial["rrd"], list(agents), described)
+        result = evaluate_agents(
+            config.condition,
+            agents,  # type: ignore[arg-type]
+            episodes=episodes,
+            seed=seed,
+            prey_epsilon=0.1 if config.prey == "learning" else None,
+            num_envs=num_envs,
+            recorder=recorder,
+            backend=config.backend,
+            predator_kind=config.predator,
+        )
+        result.update({"trained_episodes": int(state["episodes_done"]), "tag": tag})
+        if recorder is not None:
+            recorder.close()
+        atomic_write_bytes(partial["png"], reward_bars_png(result))
+        atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
+        for kind in ("rrd", "png", "json"):  # eval.json last: it says the set is complete
+            if partial[kind].exists():
+                os.replace(partial[kind], paths[kind])
+        if recorder is None:
+            paths["rrd"].unlink(missing_ok=True)  # an older recording would not match
+    except BaseException:
+        if recorder is not None:
+            recorder.close()
+        for path in partial.values():
+            path.unlink(missing_ok=True)
+        raise
+    return result

@@ -1,0 +1,91 @@
+"""Many runs trained as one: a run's result does not depend on its companions."""
+
+import numpy as np
+import pytest
+import torch
+
+from pursuit_bench.agents.config import QUICK
+from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
+
+AGENT = QUICK.replace(learning_starts=64, batch_size=16, target_update_every=100)
+
+
+def config(condition: str, seed: int, episodes: int = 24, **options) -> TrainConfig:
+    return TrainConfig(condition=condition, agent=AGENT, episodes=episodes, num_envs=4, seed=seed, **options)
+
+
+def train(configs: list[TrainConfig]) -> tuple[Trainer, list[list[dict]]]:
+    rows: list[list[dict]] = [[] for _ in configs]
+
+    def recorder_of(r: int):
+        return lambda record: rows[r].append(record.as_row())
+
+    trainer = Trainer(configs, [recorder_of(r) for r in range(len(configs))])
+    trainer.run()
+    return trainer, rows
+
+
+def weights(trainer: Trainer, run: int) -> dict[str, dict[str, torch.Tensor]]:
+    return {name: agent["learner"]["online"] for name, agent in trainer.state_dict(run)["agents"].items()}
+
+
+@pytest.fixture(autouse=True)
+def one_thread():
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+@pytest.mark.parametrize("condition", ["1p-high", "2p-low-individual"])
+def test_a_run_alone_equals_the_same_run_in_a_stack(condition: str) -> None:
+    other = "1p-low" if condition.startswith("1p") else "2p-high-shared"
+    alone, (alone_rows,) = train([config(condition, 3)])
+    stack, stack_rows = train([config(condition, 7, episodes=30), config(other, 1), config(condition, 3)])
+    assert len(stack.groups) == 2 and stack.groups[0].learner.members == 3 * (len(stack.runs[0].names) - 1)
+    assert alone_rows == stack_rows[2] and len(alone_rows) == 24
+    assert alone.groups[0].learner.updates > 0
+    mine, theirs = weights(alone, 0), weights(stack, 2)
+    for name in mine:
+        for key, value in mine[name].items():
+            assert torch.equal(value, theirs[name][key]), (name, key)
+    assert stack_rows[0] != stack_rows[2][: len(stack_rows[0])]  # other seeds learn otherwise
+
+
+def test_separate_learners_give_the_same_run_as_stacked_ones() -> None:
+    _, (stacked,) = train([config("3p-high-shared", 2)])
+    _, (separate,) = train([config("3p-high-shared", 2, batched_learners=False)])
+    assert stacked == separate
+
+
+def test_a_finished_run_stops_while_its_companions_go_on() -> None:
+    short, long = config("1p-low", 0, episodes=5), config("1p-low", 1, episodes=20)
+    counts = {0: 0, 1: 0}
+
+    def count(r: int):
+        def on_episode(record: EpisodeRecord) -> None:
+            counts[r] += 1
+
+        return on_episode
+
+    trainer = Trainer([short, long], [count(0), count(1)])
+    while not trainer.runs[0].finished:
+        trainer.step()
+    frozen = trainer.state_dict(0)
+    trainer.run()
+    assert counts == {0: 5, 1: 20} and trainer.runs[0].episodes_done == 5
+    after = trainer.state_dict(0)
+    assert after["episodes_done"] == frozen["episodes_done"] and after["env_steps"] == frozen["env_steps"]
+    for name, agent in frozen["agents"].items():
+        for key, value in agent["learner"]["online"].items():
+            assert torch.equal(value, after["agents"][name]["learner"]["online"][key])
+
+
+def test_runs_resumed_at_different_steps_cannot_share_a_stack() -> None:
+    a = Trainer(config("1p-low", 0, episodes=3))
+    a.run()
+    stack = Trainer([config("1p-low", 0, episodes=30), config("1p-low", 1, episodes=30)])
+    stack.load_state_dict(a.state_dict(), run=0)
+    with pytest.raises(ValueError, match="same env step"):
+        stack.check_lockstep()
+    assert np.isfinite(a.runs[0].obs).all()
