@@ -27,8 +27,9 @@ import click
 from click.core import ParameterSource
 
 from pursuit_bench.agents.config import PRESETS, AgentConfig
-from pursuit_bench.cli.progress import Progress, SignalCatcher, Stopped
+from pursuit_bench.cli.progress import Progress
 from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.signals import SignalCatcher, Stopped
 
 if TYPE_CHECKING:
     from pursuit_bench.train import EpisodeRecord, TrainConfig
@@ -70,6 +71,60 @@ def hyperparameter_options(command: Any) -> Any:
         help_text = docs.get(f.name, "") + f" [paper: {getattr(PRESETS['paper'], f.name)}, "
         help_text += f"quick: {getattr(PRESETS['quick'], f.name)}]"
         command = click.option(flag, f.name, type=kind, default=None, help=help_text)(command)
+    return command
+
+
+def training_options(command: Any) -> Any:
+    """The options ``train`` and ``sweep`` share: preset, budget, arenas, backend, recording,
+    checkpoints, log lines."""
+    options = [
+        click.option(
+            "--preset", type=click.Choice(list(PRESETS)), default="quick", show_default=True, help="Hyper-parameters."
+        ),
+        click.option(
+            "--episodes",
+            type=click.IntRange(min=1),
+            default=None,
+            help="Episodes to train [preset's: "
+            + ", ".join(f"{name} {preset.episodes}" for name, preset in PRESETS.items())
+            + "]. With train --resume: the run's saved target unless given, which extends or shortens the run.",
+        ),
+        click.option(
+            "--num-envs", type=click.IntRange(min=1), default=8, show_default=True, help="Arenas stepped together."
+        ),
+        click.option(
+            "--backend",
+            type=click.Choice(["pymunk", "numpy"]),
+            default="pymunk",
+            show_default=True,
+            help="Physics of the arenas: pymunk (the reference) or the numpy twin.",
+        ),
+        click.option(
+            "--record-every",
+            type=click.IntRange(min=1),
+            default=100,
+            show_default=True,
+            help="Record every Nth episode.",
+        ),
+        click.option("--no-record", is_flag=True, help="Write no Rerun recording of training."),
+        click.option(
+            "--checkpoint-every",
+            type=click.IntRange(min=1),
+            default=100,
+            show_default=True,
+            help="Episodes between checkpoints.",
+        ),
+        click.option(
+            "--log-every",
+            type=click.IntRange(min=1),
+            default=100,
+            show_default=True,
+            help="When stderr is not a terminal: a progress line every N episodes (and at least every minute).",
+        ),
+    ]
+    command = hyperparameter_options(command)
+    for option in reversed(options):
+        command = option(command)
     return command
 
 
@@ -173,17 +228,6 @@ def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: Ca
     "--condition", type=click.Choice(list(CONDITIONS)), default="1p-high", show_default=True, help="Which task."
 )
 @click.option(
-    "--preset", type=click.Choice(list(PRESETS)), default="quick", show_default=True, help="Hyper-parameters."
-)
-@click.option(
-    "--episodes",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Episodes to train [preset's: "
-    + ", ".join(f"{name} {preset.episodes}" for name, preset in PRESETS.items())
-    + "]. With --resume: the run's saved target unless given, which extends or shortens the run.",
-)
-@click.option(
     "--seed",
     type=click.IntRange(min=0),
     default=0,
@@ -198,7 +242,6 @@ def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: Ca
     "(options given beside it must agree).",
 )
 @click.option("--force", is_flag=True, help="Start over in --out, replacing the run there.")
-@click.option("--num-envs", type=click.IntRange(min=1), default=8, show_default=True, help="Arenas stepped together.")
 @click.option(
     "--predator",
     type=click.Choice(PREDATOR_KINDS),
@@ -221,34 +264,9 @@ def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: Ca
     help="Update the predators' networks in one stacked pass (same result, faster) or one by one.",
 )
 @click.option(
-    "--backend",
-    type=click.Choice(["pymunk", "numpy"]),
-    default="pymunk",
-    show_default=True,
-    help="Physics of the arenas: pymunk (the reference) or the numpy twin.",
-)
-@click.option(
-    "--record-every", type=click.IntRange(min=1), default=100, show_default=True, help="Record every Nth episode."
-)
-@click.option("--no-record", is_flag=True, help="Write no Rerun recording.")
-@click.option(
-    "--checkpoint-every",
-    type=click.IntRange(min=1),
-    default=100,
-    show_default=True,
-    help="Episodes between checkpoints.",
-)
-@click.option(
     "--threads", type=click.IntRange(min=1), default=1, show_default=True, help="torch threads (1: repeatable)."
 )
-@click.option(
-    "--log-every",
-    type=click.IntRange(min=1),
-    default=100,
-    show_default=True,
-    help="When stderr is not a terminal: a progress line every N episodes (and at least every minute).",
-)
-@hyperparameter_options
+@training_options
 @click.pass_context
 def train(
     ctx: click.Context,
@@ -443,6 +461,134 @@ def _evaluate_run(
     click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")
     if record:
         click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")
+
+
+def _names(value: str, known: list[str] | tuple[str, ...], what: str) -> tuple[str, ...]:
+    """``all`` or a comma-separated list of known names."""
+    if value == "all":
+        return tuple(known)
+    names = tuple(v.strip() for v in value.split(",") if v.strip())
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise BadInput(f"--{what} {value!r}: expected 'all' or a comma-separated list of {', '.join(known)}")
+    return names
+
+
+@main.command()
+@click.option(
+    "--conditions",
+    default="all",
+    show_default=True,
+    help="'all' (the paper's ten) or a comma-separated list, e.g. 1p-high,2p-high-shared.",
+)
+@click.option(
+    "--seeds", type=click.IntRange(min=1), default=5, show_default=True, help="Seeds 0 … N-1 of every condition."
+)
+@click.option(
+    "--predators",
+    default="hierarchical",
+    show_default=True,
+    help="Comma-separated predator kinds to train: hierarchical, flat (the ablation), always_chase, always_stalk.",
+)
+@click.option(
+    "--eval-episodes",
+    type=click.IntRange(min=1),
+    default=1000,
+    show_default=True,
+    help="Episodes per variant of each run's evaluation (paper: 1000).",
+)
+@click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Worker processes, each training one stack of runs at a time [the cores].",
+)
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="Sweep folder, e.g. sweeps/NAME.")
+@training_options
+def sweep(
+    conditions: str,
+    seeds: int,
+    predators: str,
+    preset: str,
+    episodes: int | None,
+    eval_episodes: int,
+    workers: int | None,
+    num_envs: int,
+    backend: str,
+    record_every: int,
+    no_record: bool,
+    checkpoint_every: int,
+    log_every: int,
+    out: Path,
+    **hyperparameters: Any,
+) -> None:
+    """Train and evaluate conditions × seeds × predator kinds, each run a normal run folder in
+    OUT/runs/, stacked and spread over worker processes.
+
+    Rerunning the same command skips finished runs and resumes the others from their
+    checkpoints; Ctrl-C or SIGTERM checkpoints every stack (exit 130 or 143)."""
+    import time
+
+    from pursuit_bench import sweep as sweeps
+
+    overrides = {k: v for k, v in hyperparameters.items() if v is not None}
+    try:
+        agent = PRESETS[preset].replace(**overrides)
+        plan = sweeps.SweepPlan(
+            conditions=_names(conditions, list(CONDITIONS), "conditions"),
+            seeds=seeds,
+            predators=_names(predators, PREDATOR_KINDS, "predators"),
+            agent=agent,
+            episodes=episodes or agent.episodes,
+            eval_episodes=eval_episodes,
+            num_envs=num_envs,
+            backend=backend,
+            record_every=record_every,
+            checkpoint_every=checkpoint_every,
+            preset=preset,
+        )
+        sweeps.open_sweep(out, plan)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    configs = plan.runs()
+    done = {name: sweeps.run_status(out / "runs" / name, c)[0] for name, c in configs.items()}
+    finished = {name for name, c in configs.items() if sweeps.run_status(out / "runs" / name, c)[1]}
+    total = sum(c.episodes for c in configs.values())
+    start, start_done = time.monotonic(), sum(done.values())
+
+    def describe() -> str:
+        rate = (sum(done.values()) - start_done) / max(time.monotonic() - start, 1e-9)
+        eta = (total - sum(done.values())) / rate if rate > 0 else float("nan")
+        left = "?" if eta != eta else time.strftime("%H:%M:%S", time.gmtime(eta))
+        return f"runs done {len(finished)}/{len(configs)} | ETA {left}"
+
+    progress = Progress(f"sweep {out}", total, start_done, describe, every_episodes=log_every)
+
+    def on_message(kind: str, name: str, value: Any) -> None:
+        if kind == "episode":
+            done[name] = max(done[name], int(value))
+        elif kind == "done":
+            finished.add(name)
+        progress.update(sum(done.values()))
+
+    workers = workers or os.cpu_count() or 1
+    with SignalCatcher(raise_at_once=False).active() as signals:
+        complete = sweeps.run_sweep(
+            out,
+            plan,
+            workers=workers,
+            record=not no_record,
+            on_message=on_message,
+            should_stop=lambda: signals.signum is not None,
+        )
+    progress.close()
+    if signals.signum is not None:
+        stopped = Stopped(signals.signum)
+        click.echo(f"\n{stopped}: sweep stopped, every stack checkpointed; rerun the same command to go on", err=True)
+        sys.exit(stopped.exit_code)
+    click.echo(f"sweep {out}: {len(finished)} of {len(configs)} runs trained and evaluated")
+    if not complete:
+        raise click.ClickException("some runs are not finished; rerun the same command to go on")
 
 
 #: The first bytes of every Rerun recording.

@@ -1,60 +1,16 @@
-"""Progress of a long command, and stopping it cleanly on SIGINT or SIGTERM.
-
-On a terminal, a bar; anywhere else (a log file, a cluster job), a line every so many
-episodes or seconds, whichever comes first, so a log shows how far a run got and how it was
-doing.
+"""Progress of a long command: on a terminal, a bar; anywhere else (a log file, a cluster job),
+a line every so many episodes or seconds, whichever comes first, so that a log shows how far a
+run got and how it was doing.
 """
 
 from __future__ import annotations
 
-import contextlib
-import signal
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any, TextIO
 
 import click
-
-#: Exit status of a command stopped by a signal: 128 + its number (130 for SIGINT, 143 for SIGTERM).
-STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-
-class Stopped(Exception):
-    """A SIGINT or SIGTERM arrived (raised only where the caller asked for it)."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signal.Signals(signum).name)
-        self.signum = signum
-
-    @property
-    def exit_code(self) -> int:
-        return 128 + self.signum
-
-
-class SignalCatcher:
-    """While active, SIGINT and SIGTERM are caught. ``raise_at_once=False`` only records them
-    (``signum``) for a loop to check between steps, so that nothing is cut in the middle;
-    ``True`` raises :class:`Stopped` where the program is."""
-
-    def __init__(self, raise_at_once: bool) -> None:
-        self.raise_at_once = raise_at_once
-        self.signum: int | None = None
-
-    def _handle(self, signum: int, frame: Any) -> None:
-        if self.signum is None:
-            self.signum = signum
-            if self.raise_at_once:
-                raise Stopped(signum)
-
-    @contextlib.contextmanager
-    def active(self) -> Iterator[SignalCatcher]:
-        previous = {s: signal.signal(s, self._handle) for s in STOP_SIGNALS}
-        try:
-            yield self
-        finally:
-            for s, handler in previous.items():
-                signal.signal(s, handler)
 
 
 class Progress:

@@ -1,0 +1,257 @@
+"""A sweep: conditions × seeds × predator kinds, every run a normal run folder, trained in
+stacks spread over worker processes, then evaluated by the paper's protocol.
+
+``sweeps/NAME/sweep.json`` holds the plan; ``sweeps/NAME/runs/<condition>-<predator>-seed<S>/``
+each run. Runs whose networks have the same shapes (same predator kind and number of
+predators) are grouped into stacks (:mod:`pursuit_bench.stack`); each stack is one task for a
+worker. Rerunning the same command skips finished runs and resumes the others from their
+checkpoints. Workers report progress through a queue; a worker stops (checkpointing its stack)
+on SIGINT or SIGTERM, or when the process that started it is gone.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import multiprocessing
+import os
+import queue
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pursuit_bench import runs
+from pursuit_bench.agents.config import QUICK, AgentConfig
+from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.files import atomic_write_text
+from pursuit_bench.train import TrainConfig
+
+SWEEP_FORMAT = "pursuit-bench-sweep-1"
+PLAN = "sweep.json"
+#: The evaluation seed of every run of a sweep (the CLI's ``eval`` default).
+EVAL_SEED = 12345
+
+
+@dataclass(frozen=True)
+class SweepPlan:
+    """What a sweep trains: every condition × seed × predator kind, one run each."""
+
+    conditions: tuple[str, ...]
+    """Conditions, in order (``pursuit_bench.CONDITIONS``)."""
+    seeds: int
+    """Seeds 0 … seeds − 1 for every condition and predator kind."""
+    predators: tuple[str, ...] = ("hierarchical",)
+    """Predator kinds to train (``hierarchical``, ``flat``, or a fixed baseline)."""
+    agent: AgentConfig = QUICK
+    """Hyper-parameters of every learner (a preset with any overrides)."""
+    episodes: int = 2000
+    """Training episodes of every run."""
+    eval_episodes: int = 1000
+    """Episodes per variant of each run's evaluation (paper 3.4: 1000)."""
+    num_envs: int = 8
+    """Arenas per run."""
+    backend: str = "pymunk"
+    """Physics backend of every run."""
+    record_every: int = 100
+    """Every run records its first and every Nth training episode."""
+    checkpoint_every: int = 100
+    """Episodes between checkpoints (a stack's unfinished runs checkpoint together)."""
+    preset: str = "quick"
+    """Name of the preset ``agent`` started from (for the record)."""
+
+    def __post_init__(self) -> None:
+        unknown = [c for c in self.conditions if c not in CONDITIONS]
+        if unknown or not self.conditions:
+            raise ValueError(f"conditions={list(self.conditions)!r}: expected some of {', '.join(CONDITIONS)}")
+        if isinstance(self.seeds, bool) or not isinstance(self.seeds, int) or self.seeds < 1:
+            raise ValueError(f"seeds={self.seeds!r}: expected an integer >= 1")
+        kinds = ("hierarchical", "flat", "always_chase", "always_stalk")
+        if not self.predators or any(p not in kinds for p in self.predators):
+            raise ValueError(f"predators={list(self.predators)!r}: expected some of {', '.join(kinds)}")
+
+    def runs(self) -> dict[str, TrainConfig]:
+        """Every run by its folder name, ``<condition>-<predator>-seed<S>``."""
+        return {
+            f"{condition}-{predator}-seed{seed}": TrainConfig(
+                condition=condition,
+                agent=self.agent,
+                episodes=self.episodes,
+                num_envs=self.num_envs,
+                seed=seed,
+                predator=predator,  # type: ignore[arg-type]
+                backend=self.backend,  # type: ignore[arg-type]
+            )
+            for predator in self.predators
+            for condition in self.conditions
+            for seed in range(self.seeds)
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**dataclasses.asdict(self), "agent": self.agent.to_dict()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SweepPlan:
+        fields = {**data, "agent": AgentConfig().replace(**data["agent"])}
+        fields.update(conditions=tuple(data["conditions"]), predators=tuple(data["predators"]))
+        return cls(**fields)
+
+
+def stacks(plan: SweepPlan, names: list[str], workers: int, max_runs: int = 16) -> list[list[str]]:
+    """Runs grouped into stacks: runs of one stack share network shapes (predator kind and
+    number of predators); stacks hold at most ``max_runs`` and, where the runs allow, there are
+    at least ``workers`` of them."""
+    all_runs = plan.runs()
+    groups: dict[tuple[str, int], list[str]] = {}
+    for name in names:
+        config = all_runs[name]
+        groups.setdefault((config.predator, CONDITIONS[config.condition].n_predators), []).append(name)
+    size = max(1, min(max_runs, math.ceil(len(names) / max(workers, 1))))
+    return [members[i : i + size] for members in groups.values() for i in range(0, len(members), size)]
+
+
+def open_sweep(out: Path, plan: SweepPlan) -> None:
+    """Write the plan into ``out`` (a new sweep) or check that ``out`` holds this plan."""
+    path = out / PLAN
+    if path.exists():
+        try:
+            saved = json.loads(path.read_text())
+            same = saved.get("format") == SWEEP_FORMAT and SweepPlan.from_dict(saved["plan"]) == plan
+        except (ValueError, KeyError, TypeError) as error:
+            raise ValueError(f"{path}: not a pursuit-bench sweep plan ({error})") from None
+        if not same:
+            raise ValueError(f"{out} holds a sweep with another plan ({path}); give another --out")
+        return
+    if out.exists() and any(out.iterdir()):
+        raise ValueError(f"{out}: the folder is not empty and holds no sweep; choose another --out")
+    out.mkdir(parents=True, exist_ok=True)
+    payload = {"format": SWEEP_FORMAT, "plan": plan.to_dict(), "runs": sorted(plan.runs())}
+    atomic_write_text(path, json.dumps(payload, indent=2) + "\n")
+
+
+def run_status(folder: Path, config: TrainConfig) -> tuple[int, bool]:
+    """(episodes trained, evaluated) of a sweep's run folder, from its checkpoint and eval.json."""
+    try:
+        done = int(runs.load_checkpoint(folder)["episodes_done"])
+    except ValueError:
+        return 0, False
+    return done, done >= config.episodes and (folder / "eval.json").exists()
+
+
+def _prepare(folder: Path, name: str, config: TrainConfig, plan: SweepPlan) -> dict[str, Any] | None:
+    """Make ``folder`` hold run ``name`` (its lock held); the checkpoint to resume from, or None."""
+    folder.mkdir(parents=True, exist_ok=True)
+    if runs.is_run(folder) and (folder / runs.CHECKPOINT).exists():
+        saved, _ = runs.read_config(folder)
+        if saved != config:
+            raise ValueError(f"{folder} holds a run with another configuration than the sweep's {name}")
+        return runs.load_checkpoint(folder)
+    runs.clear(folder)
+    settings = {
+        "preset": plan.preset,
+        "record_every": plan.record_every,
+        "checkpoint_every": plan.checkpoint_every,
+        "recording_id": uuid.uuid4().hex,
+        "sweep": str(folder.parent.parent),
+    }
+    runs.write_config(folder, config, settings)
+    return None
+
+
+def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -> None:
+    """A worker's task: train the runs ``names`` of the sweep in ``out`` as one stack, then
+    evaluate each. Sends ``("episode", name, n)`` as episodes finish and ``("done", name,
+    None)`` when a run is trained and evaluated into ``messages``. Stops, checkpointing, on
+    SIGINT, SIGTERM or when its parent process is gone."""
+    import contextlib
+
+    import torch
+
+    from pursuit_bench.signals import SignalCatcher
+    from pursuit_bench.stack import FolderRun, evaluate_folder, train_stack
+
+    torch.set_num_threads(1)
+    plan = SweepPlan.from_dict(json.loads((out / PLAN).read_text())["plan"])
+    configs = plan.runs()
+    parent = os.getppid()
+    with SignalCatcher(raise_at_once=False).active() as signals, contextlib.ExitStack() as locks:
+
+        def should_stop() -> bool:
+            return signals.signum is not None or os.getppid() != parent
+
+        folders = {name: out / "runs" / name for name in names}
+        for folder in folders.values():
+            folder.mkdir(parents=True, exist_ok=True)
+            locks.enter_context(runs.locked(folder))
+        pending = []
+        for name in names:
+            state = _prepare(folders[name], name, configs[name], plan)
+            settings = runs.read_config(folders[name])[1]
+            pending.append((name, FolderRun(folders[name], configs[name], settings, state)))
+        by_step: dict[int, list[tuple[str, FolderRun]]] = {}
+        for name, run in pending:  # runs stacked together must resume from the same step
+            by_step.setdefault(run.env_steps, []).append((name, run))
+        for group in by_step.values():
+            group_names = [name for name, _ in group]
+
+            def report(k: int, record: Any, group_names: list[str] = group_names) -> None:
+                messages.put(("episode", group_names[k], record.episode))
+
+            train_stack([run for _, run in group], record=record, should_stop=should_stop, on_episode=report)
+            if should_stop():
+                break
+        for name in names:
+            if should_stop():
+                break
+            done, evaluated = run_status(folders[name], configs[name])
+            if done >= configs[name].episodes and not evaluated:
+                evaluate_folder(folders[name], episodes=plan.eval_episodes, seed=EVAL_SEED, record=False)
+            messages.put(("done", name, None))
+
+
+def run_sweep(
+    out: Path,
+    plan: SweepPlan,
+    *,
+    workers: int,
+    record: bool = True,
+    on_message: Callable[[str, str, Any], None] = lambda kind, name, value: None,
+    should_stop: Callable[[], bool] = lambda: False,
+) -> bool:
+    """Run the sweep in ``out`` (written or checked by :func:`open_sweep`) on ``workers``
+    processes. ``on_message`` hears the workers' messages; when ``should_stop()`` turns true
+    the workers are sent SIGTERM and waited for. Returns whether every run is done."""
+    configs = plan.runs()
+    todo = [name for name, config in configs.items() if not run_status(out / "runs" / name, config)[1]]
+    tasks = stacks(plan, todo, workers)
+    context = multiprocessing.get_context("spawn")
+    messages = context.Queue()
+    running: list[Any] = []
+    stopping = False
+    while tasks or running:
+        if should_stop() and not stopping:
+            stopping = True
+            tasks.clear()
+            for process in running:
+                process.terminate()  # SIGTERM: the worker checkpoints its stack and ends
+        while tasks and len(running) < workers:
+            process = context.Process(target=run_stack, args=(out, tasks.pop(0), messages, record), daemon=False)
+            process.start()
+            running.append(process)
+        try:
+            on_message(*messages.get(timeout=0.2))
+        except queue.Empty:
+            pass
+        for process in [p for p in running if not p.is_alive()]:
+            process.join()
+            running.remove(process)
+            if process.exitcode not in (0, None) and not stopping:
+                raise RuntimeError(f"a sweep worker failed (exit status {process.exitcode}); rerun to resume")
+    while True:  # what the last workers said before they ended
+        try:
+            on_message(*messages.get_nowait())
+        except queue.Empty:
+            break
+    return all(run_status(out / "runs" / name, config)[1] for name, config in configs.items())

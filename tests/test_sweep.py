@@ -1,0 +1,90 @@
+"""`pursuit-bench sweep`: run folders trained in stacks over worker processes, resumable."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from cli_helpers import run_cli
+
+from pursuit_bench import runs
+from pursuit_bench.sweep import SweepPlan, stacks
+
+SWEEP = ["sweep", "--conditions", "1p-high,2p-high-shared", "--seeds", "2", "--episodes", "40"]
+SWEEP += ["--eval-episodes", "50", "--workers", "2", "--checkpoint-every", "10"]
+NAMES = [f"{c}-hierarchical-seed{s}" for c in ("1p-high", "2p-high-shared") for s in (0, 1)]
+
+
+def episodes_of(folder: Path) -> list[int]:
+    return [json.loads(line)["episode"] for line in (folder / "metrics.jsonl").read_text().splitlines()]
+
+
+def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alone(tmp_path: Path) -> None:
+    out = tmp_path / "sweep"
+    code, output = run_cli(*SWEEP, "--out", str(out))
+    assert code == 0 and "4 of 4 runs trained and evaluated" in output, output
+    plan = json.loads((out / "sweep.json").read_text())
+    assert plan["runs"] == sorted(NAMES) and plan["plan"]["episodes"] == 40
+    for name in NAMES:
+        folder = out / "runs" / name
+        assert episodes_of(folder) == list(range(1, 41))
+        result = json.loads((folder / "eval.json").read_text())
+        assert result["episodes"] == 50 and result["predator_kind"] == "hierarchical"
+        assert result["trained_episodes"] == 40 and (folder / "train.rrd").exists()
+
+    alone = tmp_path / "alone"  # the same run, trained by itself
+    code, output = run_cli(
+        "train", "--condition", "2p-high-shared", "--seed", "1", "--episodes", "40", "--out", str(alone), "--no-record"
+    )
+    assert code == 0, output
+    assert (alone / "metrics.jsonl").read_text() == (out / "runs" / NAMES[3] / "metrics.jsonl").read_text()
+
+    code, output = run_cli(*SWEEP, "--out", str(out))  # finished: nothing to do
+    assert code == 0 and "4 of 4" in output
+    assert episodes_of(out / "runs" / NAMES[0]) == list(range(1, 41))
+    code, output = run_cli(*SWEEP[:-2], "--workers", "1", "--seeds", "3", "--out", str(out))
+    assert code == 2 and "another plan" in output
+    code, output = run_cli("eval", str(out / "runs" / NAMES[0]), "--episodes", "4", "--tag", "mine", "--no-record")
+    assert code == 0, output
+
+
+def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path) -> None:
+    out = tmp_path / "sweep"
+    command = [sys.executable, "-m", "pursuit_bench.cli.main", *SWEEP, "--episodes", "120", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    start = time.monotonic()
+    while not list(out.glob("runs/*/checkpoint.pt")):
+        assert time.monotonic() - start < 120, "no checkpoint appeared"
+        time.sleep(0.1)
+    time.sleep(1.0)
+    os.killpg(process.pid, signal.SIGKILL)  # the sweep and its workers, at once
+    process.wait()
+    assert not all((out / "runs" / name / "eval.json").exists() for name in NAMES)
+    rerun = subprocess.run(command, capture_output=True, text=True)
+    assert rerun.returncode == 0, rerun.stderr
+    for name in NAMES:
+        folder = out / "runs" / name
+        assert episodes_of(folder) == list(range(1, 121)), name
+        assert runs.load_checkpoint(folder)["episodes_done"] == 120
+        assert (folder / "eval.json").exists()
+
+
+def test_stacks_share_shapes_and_spread_over_workers() -> None:
+    plan = SweepPlan(conditions=("1p-low", "1p-high", "2p-low-shared"), seeds=4, predators=("hierarchical", "flat"))
+    names = list(plan.runs())
+    groups = stacks(plan, names, workers=4)
+    assert sorted(n for g in groups for n in g) == sorted(names) and len(groups) >= 4
+    for group in groups:
+        shapes = {(n.split("-")[0], n.split("-")[-2]) for n in group}
+        assert len(shapes) == 1, group
+
+
+def test_bad_sweep_input_is_one_line() -> None:
+    code, output = run_cli("sweep", "--conditions", "1p-high,9p", "--out", "x")
+    assert code == 2 and "expected 'all' or a comma-separated list" in output
+    with pytest.raises(ValueError, match="seeds=0"):
+        SweepPlan(conditions=("1p-high",), seeds=0)
