@@ -1,9 +1,14 @@
-"""Training throughput: transitions per second with the learners of a condition updated together
-(stacked, one batched computation) versus one by one, in one process and one run.
+"""Training throughput: K runs trained one after another versus stacked in one process, and
+Stable-Baselines3's DQN on the single-agent view, in one process and one run.
 
-    python benchmarks/bench_train.py [--condition 3p-high-shared] [--steps 150] [--repeats 3]
+    python benchmarks/bench_train.py [--runs 5] [--steps 100] [--repeats 3]
 
-One thread for torch, as on a busy 2-core machine; medians of ``--repeats`` timed runs.
+For each of 1p-high and 3p-high-shared: transitions/s (arena-steps of one run, every agent
+learning) and member-updates/s (one gradient step of one agent's network) of one run alone
+(one after another, K runs take K times as long) and of K seeds stacked. Then SB3's DQN on
+``gymnasium.make("pursuit_bench/Pursuit-v0", agent="prey_0")`` with the same batch size and
+network sizes, one update per transition. One torch thread, as on a busy 2-core machine;
+medians of ``--repeats`` timed runs, after the replays have filled past ``learning_starts``.
 """
 
 from __future__ import annotations
@@ -12,44 +17,95 @@ import argparse
 import statistics
 import time
 
+import gymnasium
 import torch
 
+import pursuit_bench  # noqa: F401  (registers the Gymnasium env)
 from pursuit_bench.agents.config import QUICK
 from pursuit_bench.train import TrainConfig, Trainer
 
+AGENT = QUICK.replace(learning_starts=500)
 
-def transitions_per_second(config: TrainConfig, steps: int, repeats: int) -> float:
-    """Median transitions/s (arena-steps, every agent learning) once learning has started."""
+
+def trainer_rates(configs: list[TrainConfig], steps: int, repeats: int) -> tuple[float, float, float]:
+    """Median (transitions/s, member-updates/s, seconds per member-update) of a stack."""
     rates = []
     for _ in range(repeats):
-        trainer = Trainer(config)
-        while trainer.groups[0].learner.steps < config.agent.learning_starts:
+        trainer = Trainer(configs)
+        while trainer.groups[0].learner.steps < AGENT.learning_starts:
             trainer.step()  # fill the replays first: we time learning, not warm-up
+        updates_before = sum(g.learner.updates * g.learner.members for g in trainer.groups)
         start = time.perf_counter()
         for _ in range(steps):
             trainer.step()
-        rates.append(steps * config.num_envs / (time.perf_counter() - start))
-    return statistics.median(rates)
+        elapsed = time.perf_counter() - start
+        member_updates = sum(g.learner.updates * g.learner.members for g in trainer.groups) - updates_before
+        transitions = steps * sum(c.num_envs for c in configs)
+        rates.append((transitions / elapsed, member_updates / elapsed))
+    transitions = statistics.median(r[0] for r in rates)
+    updates = statistics.median(r[1] for r in rates)
+    return transitions, updates, 1.0 / updates
+
+
+def sb3_rates(steps: int, repeats: int) -> tuple[float, float] | None:
+    """SB3 DQN's (transitions/s, updates/s), or None without stable-baselines3."""
+    try:
+        from stable_baselines3 import DQN
+    except ImportError:
+        return None
+    rates = []
+    for repeat in range(repeats):
+        env = gymnasium.make("pursuit_bench/Pursuit-v0", agent="prey_0", condition="1p-high")
+        model = DQN(
+            "MlpPolicy",
+            env,
+            learning_rate=AGENT.learning_rate,
+            buffer_size=AGENT.buffer_size,
+            learning_starts=AGENT.learning_starts,
+            batch_size=AGENT.batch_size,
+            gamma=AGENT.gamma,
+            train_freq=1,
+            gradient_steps=1,
+            policy_kwargs={"net_arch": [64, 64]},
+            seed=repeat,
+            device="cpu",
+        )
+        model.learn(total_timesteps=AGENT.learning_starts + 10)
+        start = time.perf_counter()
+        model.learn(total_timesteps=steps, reset_num_timesteps=False)
+        rate = steps / (time.perf_counter() - start)
+        rates.append(rate)
+    rate = statistics.median(rates)
+    return rate, rate  # one update per transition
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--condition", default="3p-high-shared")
+    parser.add_argument("--runs", type=int, default=5, help="K: seeds stacked")
     parser.add_argument("--num-envs", type=int, default=8)
-    parser.add_argument("--steps", type=int, default=150)
+    parser.add_argument("--steps", type=int, default=100, help="env steps timed per repeat")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     torch.set_num_threads(1)
-    agent = QUICK.replace(learning_starts=500)
-    rates = {}
-    for batched in (True, False):
-        config = TrainConfig(
-            condition=args.condition, agent=agent, num_envs=args.num_envs, batched_learners=batched, episodes=10**9
-        )
-        rates[batched] = transitions_per_second(config, args.steps, args.repeats)
-        label = "learners updated together" if batched else "learners updated one by one"
-        print(f"{args.condition} {label:28s} {rates[batched]:8,.0f} transitions/s")
-    print(f"ratio together / one by one: {rates[True] / rates[False]:.2f}x")
+    print(f"{'':36s} {'transitions/s':>14s} {'member-updates/s':>17s} {'ms/member-update':>17s}")
+    for condition in ("1p-high", "3p-high-shared"):
+        configs = [
+            TrainConfig(condition=condition, agent=AGENT, num_envs=args.num_envs, seed=s, episodes=10**9)
+            for s in range(args.runs)
+        ]
+        alone = trainer_rates(configs[:1], args.steps, args.repeats)
+        stacked = trainer_rates(configs, max(1, args.steps // 2), args.repeats)
+        for label, (t, u, s) in (
+            (f"{condition}, one run at a time", alone),
+            (f"{condition}, {args.runs} stacked", stacked),
+        ):
+            print(f"{label:36s} {t:14,.0f} {u:17,.0f} {s * 1e3:17.3f}")
+        print(f"  stacked / one after another: {stacked[0] / alone[0]:.2f}x transitions/s")
+    sb3 = sb3_rates(args.steps * 4, args.repeats)
+    if sb3 is None:
+        print("SB3 DQN: not installed (pip install stable-baselines3)")
+        return
+    print(f"{'SB3 DQN, single-agent view':36s} {sb3[0]:14,.0f} {sb3[1]:17,.0f} {1e3 / sb3[1]:17.3f}")
 
 
 if __name__ == "__main__":

@@ -69,6 +69,8 @@ def train_stack(
                 recording_id=r.settings.get("recording_id") or str(r.folder),
             )
         recorders.append(recorder)
+    for r in todo:  # rows written after the checkpoint (a killed process) are trained again
+        runs.keep_metrics(r.folder, r.episodes_done)
     metrics = [(r.folder / runs.METRICS).open("a") for r in todo]
 
     def writer(k: int) -> Callable[[EpisodeRecord], None]:

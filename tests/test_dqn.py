@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import torch
 
+from pursuit_bench.agents.adam import FlatAdam
 from pursuit_bench.agents.config import QUICK, AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner, double_dqn_targets
 from pursuit_bench.agents.network import DuelingQNetwork
@@ -43,9 +44,8 @@ def test_double_dqn_target_by_hand() -> None:
     next_obs = np.random.default_rng(1).normal(size=(1, 6, 4))
     rewards = np.array([[0.5, -1.0, 0.0, 1.0, 0.2, -0.1]])
     terminated = np.array([[0, 0, 1, 0, 1, 0]], dtype=np.float64)
-    y = double_dqn_targets(
-        online, target, *(torch.as_tensor(x, dtype=torch.float32) for x in (rewards, next_obs, terminated)), gamma=0.9
-    ).numpy()
+    r, s_next, term = (torch.as_tensor(x, dtype=torch.float32) for x in (rewards, next_obs, terminated))
+    y = double_dqn_targets(online(s_next), target, r, s_next, term, gamma=0.9).numpy()
     q_online, _, _ = naive_forward(online, next_obs[0])
     q_target, _, _ = naive_forward(target, next_obs[0])
     best = q_online.argmax(axis=1)  # the online net chooses, the target net evaluates
@@ -58,7 +58,8 @@ def test_only_termination_cuts_the_bootstrap() -> None:
     learner = DQNLearner(3, 2, QUICK, seed=0)
     obs = np.ones((1, 2, 3), dtype=np.float32)
     r = torch.tensor([[1.0, 1.0]])
-    y_end = double_dqn_targets(learner.online, learner.target, r, torch.as_tensor(obs), torch.tensor([[1.0, 0.0]]), 0.9)
+    s_next = torch.as_tensor(obs)
+    y_end = double_dqn_targets(learner.online(s_next), learner.target, r, s_next, torch.tensor([[1.0, 0.0]]), 0.9)
     q_next = learner.target(torch.as_tensor(obs))[0, 0]
     assert y_end[0, 0].item() == pytest.approx(1.0)  # terminated: no bootstrap
     bootstrap = 1.0 + 0.9 * q_next[learner.online(torch.as_tensor(obs))[0, 0].argmax()].item()
@@ -152,3 +153,24 @@ def test_target_network_starts_as_a_copy_and_is_copied_every_n_transitions() -> 
     y = np.zeros((1, 6, 3), dtype=np.float32)
     learner.store(y, np.zeros((1, 6), dtype=int), np.ones((1, 6)), y, np.zeros((1, 6)))  # 10 transitions
     assert same()
+
+
+def test_flat_adam_equals_torch_adam() -> None:
+    """The flat-buffer Adam makes torch's Adam steps, with every parameter and moment in place."""
+    ours, theirs = DuelingQNetwork(6, 3, members=2, seed=4), DuelingQNetwork(6, 3, members=2, seed=4)
+    flat = FlatAdam(ours, lr=1e-2)
+    reference = torch.optim.Adam(theirs.parameters(), lr=1e-2, foreach=False)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        x = torch.as_tensor(rng.normal(size=(2, 8, 6)), dtype=torch.float32)
+        flat.zero_grad()
+        (ours(x) ** 2).sum().backward()
+        flat.step()
+        reference.zero_grad()
+        (theirs(x) ** 2).sum().backward()
+        reference.step()
+    assert flat.grad.abs().sum() > 0  # backward wrote into the flat gradient
+    for (name, a), b in zip(ours.named_parameters(), theirs.parameters(), strict=True):
+        torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6, msg=name)
+    for avg, p in zip(flat.exp_avg, theirs.parameters(), strict=True):
+        torch.testing.assert_close(avg, reference.state[p]["exp_avg"], rtol=1e-5, atol=1e-7)

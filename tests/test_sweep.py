@@ -60,7 +60,7 @@ def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: P
     while not list(out.glob("runs/*/checkpoint.pt")):
         assert time.monotonic() - start < 120, "no checkpoint appeared"
         time.sleep(0.1)
-    time.sleep(1.0)
+    time.sleep(1.5)  # past the checkpoint: metrics rows beyond it must not survive the resume
     os.killpg(process.pid, signal.SIGKILL)  # the sweep and its workers, at once
     process.wait()
     assert not all((out / "runs" / name / "eval.json").exists() for name in NAMES)

@@ -17,26 +17,28 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from pursuit_bench.agents.adam import FlatAdam
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, PrioritizedReplay
 
 
 def double_dqn_targets(
-    online: DuelingQNetwork,
+    online_next: torch.Tensor,
     target: DuelingQNetwork,
     rewards: torch.Tensor,
     next_obs: torch.Tensor,
     terminated: torch.Tensor,
     gamma: float,
 ) -> torch.Tensor:
-    """``y = r + γ (1 - terminated) Q_target(s', argmax_a Q_online(s', a))``, shapes (M, B).
+    """``y = r + γ (1 - terminated) Q_target(s', argmax_a Q_online(s', a))``, shapes (M, B);
+    ``online_next`` is ``Q_online(s', ·)`` (M, B, A).
 
     Only termination cuts the bootstrap: a truncated transition (time limit) is stored with
     ``terminated = 0`` and bootstraps from its real next observation.
     """
     with torch.no_grad():
-        best = online(next_obs).argmax(dim=-1, keepdim=True)
+        best = online_next.argmax(dim=-1, keepdim=True)
         next_value = target(next_obs).gather(-1, best).squeeze(-1)
         return rewards + gamma * (1.0 - terminated) * next_value
 
@@ -59,10 +61,7 @@ class DQNLearner:
         self.target = DuelingQNetwork(n_obs, n_actions, members=members, seed=seeds)
         self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
         self.target.requires_grad_(False)
-        # Plain (per-tensor) Adam: torch's fused kernel rounds an element differently depending
-        # on where it falls in its vectorised loop, so a member's weights would depend on its
-        # place in the stack; the plain and foreach kernels have no such dependence (tested).
-        self.optimizer = torch.optim.Adam(self.online.parameters(), lr=config.learning_rate, foreach=False)
+        self.optimizer = FlatAdam(self.online, lr=config.learning_rate)
         self.replays = [
             PrioritizedReplay(
                 config.buffer_size,
@@ -143,7 +142,7 @@ class DQNLearner:
     def learn(self, batches: list[Batch]) -> np.ndarray:
         """One gradient step on the given batches (one per member), then their new priorities."""
         losses, td = self.loss(batches)
-        self.optimizer.zero_grad(set_to_none=True)
+        self.optimizer.zero_grad()
         losses.sum().backward()
         self.optimizer.step()
         td_np = td.detach().numpy()
@@ -164,19 +163,21 @@ class DQNLearner:
         rewards, terminated = stack("rewards", torch.float32), stack("terminated", torch.float32)
         weights = stack("weights", torch.float32)
         q = self.online(obs).gather(-1, actions.unsqueeze(-1)).squeeze(-1)
-        y = double_dqn_targets(self.online, self.target, rewards, next_obs, terminated, self.config.gamma)
+        with torch.no_grad():
+            online_next = self.online(next_obs)
+        y = double_dqn_targets(online_next, self.target, rewards, next_obs, terminated, self.config.gamma)
         per_sample = F.huber_loss(q, y, reduction="none", delta=self.config.huber_delta)
         return (weights * per_sample).mean(dim=1), q - y
 
     def member_state(self, m: int) -> dict[str, Any]:
         """Member m's parameters, target, Adam moments, replay and counters, as plain data."""
-        adam = [self.optimizer.state[p] for p in self.online.parameters()]
+        adam = self.optimizer
         return {
             "online": {k: v[m].clone() for k, v in self.online.state_dict().items()},
             "target": {k: v[m].clone() for k, v in self.target.state_dict().items()},
-            "adam_step": [float(s["step"]) if s else 0.0 for s in adam],
-            "adam_exp_avg": [s["exp_avg"][m].clone() if s else None for s in adam],
-            "adam_exp_avg_sq": [s["exp_avg_sq"][m].clone() if s else None for s in adam],
+            "adam_step": [float(adam.step_count)] * len(adam.params),
+            "adam_exp_avg": [avg[m].clone() for avg in adam.exp_avg],
+            "adam_exp_avg_sq": [avg_sq[m].clone() for avg_sq in adam.exp_avg_sq],
             "replay": {
                 k: (torch.from_numpy(v) if isinstance(v, np.ndarray) else v)
                 for k, v in self.replays[m].state_dict().items()
@@ -194,18 +195,13 @@ class DQNLearner:
             for net, key in ((self.online, "online"), (self.target, "target")):
                 for name, tensor in net.state_dict().items():
                     tensor[m] = state[key][name]
-        for p, step, avg, avg_sq in zip(
-            self.online.parameters(), state["adam_step"], state["adam_exp_avg"], state["adam_exp_avg_sq"], strict=True
-        ):
-            if avg is None:
-                continue
-            s = self.optimizer.state[p]
-            if not s:
-                s["exp_avg"] = torch.zeros_like(p)
-                s["exp_avg_sq"] = torch.zeros_like(p)
-            s["step"] = torch.tensor(step)
-            s["exp_avg"][m] = avg
-            s["exp_avg_sq"][m] = avg_sq
+            adam = self.optimizer
+            adam.step_count = int(max(state["adam_step"], default=0))
+            for exp_avg, exp_avg_sq, avg, avg_sq in zip(
+                adam.exp_avg, adam.exp_avg_sq, state["adam_exp_avg"], state["adam_exp_avg_sq"], strict=True
+            ):
+                if avg is not None:  # None: a parameter that had no Adam state yet
+                    exp_avg[m], exp_avg_sq[m] = avg, avg_sq
         replay = {k: (v.numpy() if isinstance(v, torch.Tensor) else v) for k, v in state["replay"].items()}
         self.replays[m].load_state_dict(replay)
         self.steps, self.updates = int(state["steps"]), int(state["updates"])

@@ -195,7 +195,6 @@ def _prepare_folder(out: Path, config: TrainConfig, settings: dict[str, Any], re
                 raise BadInput(f"cannot resume: {error}") from None
         else:
             click.echo(f"{out}: no checkpoint yet; starting the run from its beginning", err=True)
-        runs.keep_metrics(out, int(state["episodes_done"]) if state else 0)
         runs.write_config(out, config, settings)
         return state
     if not runs.holds_only_unstarted_or_nothing(out):
