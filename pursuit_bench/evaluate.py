@@ -103,6 +103,11 @@ def run_episodes(
     )
 
 
+def standard_error(values: np.ndarray) -> float:
+    """The standard error of the mean of ``values`` (0 for a single value)."""
+    return float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
+
+
 def evaluate_agents(
     condition: str,
     agents: dict[str, Actor],
@@ -122,8 +127,9 @@ def evaluate_agents(
     capture, distance travelled and fraction of steps in chase, as trained. The episodes as
     trained go into ``recorder``.
 
-    Each panel holds ``trained`` (the predator as trained), ``always_chase`` and
-    ``always_stalk``; ``predator_kind`` names what the trained predators are (``hierarchical``,
+    Each panel holds the mean returns ``trained`` (the predator as trained), ``always_chase``
+    and ``always_stalk``, their standard errors and every episode's return (``stderr``,
+    ``episode_returns``, keyed alike); ``predator_kind`` names what the trained predators are (``hierarchical``,
     ``flat``, …; by default read from the first predator's ``kind``)."""
     names = list(agents)
     predators, prey = names[:-1], names[-1]
@@ -140,12 +146,13 @@ def evaluate_agents(
     for i, name in enumerate(predators):
         chase = play({**agents, name: ScriptedAgent(name, AlwaysChase())})
         stalk = play({**agents, name: ScriptedAgent(name, AlwaysStalk())})
+        variants = {"trained": trained, "always_chase": chase, "always_stalk": stalk}
         panels.append(
             {
                 "predator": name,
-                "trained": float(trained.returns[:, i].mean()),
-                "always_chase": float(chase.returns[:, i].mean()),
-                "always_stalk": float(stalk.returns[:, i].mean()),
+                **{key: float(played.returns[:, i].mean()) for key, played in variants.items()},
+                "stderr": {key: standard_error(played.returns[:, i]) for key, played in variants.items()},
+                "episode_returns": {key: played.returns[:, i].round(6).tolist() for key, played in variants.items()},
             }
         )
     captured = trained.captured

@@ -162,7 +162,7 @@ def evaluate_folder(
             backend=config.backend,
             predator_kind=config.predator,
         )
-        result.update({"trained_episodes": int(state["episodes_done"]), "tag": tag})
+        result.update({"trained_episodes": int(state["episodes_done"]), "training": config.to_dict(), "tag": tag})
         if recorder is not None:
             recorder.close()
         atomic_write_bytes(partial["png"], reward_bars_png(result))

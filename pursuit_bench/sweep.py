@@ -17,6 +17,7 @@ import math
 import multiprocessing
 import os
 import queue
+import tempfile
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -26,7 +27,7 @@ from typing import Any
 from pursuit_bench import runs
 from pursuit_bench.agents.config import QUICK, AgentConfig
 from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.files import atomic_write_text
+from pursuit_bench.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.train import TrainConfig
 
 SWEEP_FORMAT = "pursuit-bench-sweep-1"
@@ -154,7 +155,6 @@ def _prepare(folder: Path, name: str, config: TrainConfig, plan: SweepPlan) -> d
         "record_every": plan.record_every,
         "checkpoint_every": plan.checkpoint_every,
         "recording_id": uuid.uuid4().hex,
-        "sweep": str(folder.parent.parent),
     }
     runs.write_config(folder, config, settings)
     return None
@@ -217,15 +217,38 @@ def run_sweep(
     *,
     workers: int,
     record: bool = True,
+    executor: str = "local",
+    address: str | None = None,
     on_message: Callable[[str, str, Any], None] = lambda kind, name, value: None,
     should_stop: Callable[[], bool] = lambda: False,
 ) -> bool:
-    """Run the sweep in ``out`` (written or checked by :func:`open_sweep`) on ``workers``
-    processes. ``on_message`` hears the workers' messages; when ``should_stop()`` turns true
-    the workers are sent SIGTERM and waited for. Returns whether every run is done."""
+    """Run the sweep in ``out`` (written or checked by :func:`open_sweep`): its unfinished runs,
+    in stacks, on ``workers`` local processes (``executor="local"``) or as Ray tasks
+    (``"ray"``, on the cluster at ``address`` or a local instance of ``workers`` CPUs).
+    ``on_message`` hears the workers' messages; when ``should_stop()`` turns true the workers
+    are stopped (local ones checkpoint first). Returns whether every run is done."""
     configs = plan.runs()
     todo = [name for name, config in configs.items() if not run_status(out / "runs" / name, config)[1]]
     tasks = stacks(plan, todo, workers)
+    if executor == "ray":
+        _run_on_ray(
+            out, tasks, workers=workers, address=address, record=record, on_message=on_message, should_stop=should_stop
+        )
+    elif executor == "local":
+        _run_locally(out, tasks, workers=workers, record=record, on_message=on_message, should_stop=should_stop)
+    else:
+        raise ValueError(f"executor={executor!r}: expected 'local' or 'ray'")
+    return all(run_status(out / "runs" / name, config)[1] for name, config in configs.items())
+
+
+def _run_locally(
+    out: Path,
+    tasks: list[list[str]],
+    workers: int,
+    record: bool,
+    on_message: Callable[[str, str, Any], None],
+    should_stop: Callable[[], bool],
+) -> None:
     context = multiprocessing.get_context("spawn")
     messages = context.Queue()
     running: list[Any] = []
@@ -254,4 +277,80 @@ def run_sweep(
             on_message(*messages.get_nowait())
         except queue.Empty:
             break
-    return all(run_status(out / "runs" / name, config)[1] for name, config in configs.items())
+
+
+class _Messages(list):
+    """A worker's messages kept in a list (a Ray task returns them with its result)."""
+
+    def put(self, message: tuple[str, str, Any]) -> None:
+        self.append(message)
+
+
+def stack_task(plan_json: str, names: list[str], files: dict[str, dict[str, bytes]], record: bool) -> dict[str, Any]:
+    """One stack as a self-contained task, for a machine that does not share our file system:
+    the sweep's plan and the runs' current files come in, the runs' files and the messages go
+    out. (Ray runs it; it needs nothing of Ray.)"""
+    with tempfile.TemporaryDirectory(prefix="pursuit-bench-stack-") as tmp:
+        out = Path(tmp)
+        (out / PLAN).write_text(plan_json)
+        for name, contents in files.items():
+            for file_name, data in contents.items():
+                (out / "runs" / name).mkdir(parents=True, exist_ok=True)
+                (out / "runs" / name / file_name).write_bytes(data)
+        messages = _Messages()
+        run_stack(out, names, messages, record)
+        return {"files": {name: _files(out / "runs" / name) for name in names}, "messages": list(messages)}
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    """A run folder's own files (no lock, no temporary file)."""
+    if not folder.is_dir():
+        return {}
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file() and not p.name.startswith(".")}
+
+
+def _run_on_ray(
+    out: Path,
+    tasks: list[list[str]],
+    workers: int,
+    address: str | None,
+    record: bool,
+    on_message: Callable[[str, str, Any], None],
+    should_stop: Callable[[], bool],
+) -> None:
+    """Every stack a Ray task (one CPU: a stack trains on one thread), retried if its node is
+    lost; the driver writes what each returns into ``out``, run folder by run folder."""
+    try:
+        import ray
+    except ImportError:
+        raise ValueError("--backend ray needs Ray: pip install 'pursuit-bench[ray]'") from None
+    if address is None:
+        ray.init(num_cpus=workers, include_dashboard=False, object_store_memory=200 * 2**20, log_to_driver=False)
+    else:
+        ray.init(address=address, log_to_driver=False)
+    try:
+        remote = ray.remote(num_cpus=1, max_retries=3, retry_exceptions=False)(stack_task)
+        plan_json = (out / PLAN).read_text()
+        pending = {
+            remote.remote(plan_json, names, {n: _files(out / "runs" / n) for n in names}, record): names
+            for names in tasks
+        }
+        while pending:
+            if should_stop():
+                for ref in pending:
+                    ray.cancel(ref, force=True)
+                return
+            done, _ = ray.wait(list(pending), num_returns=1, timeout=0.5)
+            for ref in done:
+                pending.pop(ref)
+                result = ray.get(ref)
+                for name, contents in result["files"].items():
+                    folder = out / "runs" / name
+                    folder.mkdir(parents=True, exist_ok=True)
+                    with runs.locked(folder):
+                        for file_name, data in contents.items():
+                            atomic_write_bytes(folder / file_name, data)
+                for message in result["messages"]:
+                    on_message(*message)
+    finally:
+        ray.shutdown()

@@ -152,12 +152,12 @@ def test_a_flat_or_scripted_predator_is_named_by_its_kind(tmp_path: Path) -> Non
         code, output = run_cli("eval", str(out), "--episodes", "4", "--num-envs", "4", "--no-record")
         assert code == 0 and f"predator_0: {kind} " in output and "hierarchical" not in output, output
         result = json.loads((out / "eval.json").read_text())
-        assert result["predator_kind"] == kind and set(result["panels"][0]) == {
-            "predator",
-            "trained",
-            "always_chase",
-            "always_stalk",
-        }
+        panel = result["panels"][0]
+        assert result["predator_kind"] == kind and result["training"]["predator"] == kind
+        assert set(panel) == {"predator", "trained", "always_chase", "always_stalk", "stderr", "episode_returns"}
+        for variant in ("trained", "always_chase", "always_stalk"):
+            assert len(panel["episode_returns"][variant]) == 4
+            assert abs(sum(panel["episode_returns"][variant]) / 4 - panel[variant]) < 1e-5
 
 
 def test_view_opens_a_folder_and_refuses_what_is_not_a_recording(tmp_path: Path, monkeypatch) -> None:

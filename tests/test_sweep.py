@@ -51,6 +51,30 @@ def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alon
     code, output = run_cli("eval", str(out / "runs" / NAMES[0]), "--episodes", "4", "--tag", "mine", "--no-record")
     assert code == 0, output
 
+    code, output = run_cli("report", str(out))  # Fig. 2 over the two seeds
+    assert code == 0 and "3 panels" in output, output
+    for name in ("fig2.png", "curves.png"):
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (out / name).stat().st_size > 20_000
+    report = json.loads((out / "report.json").read_text())
+    assert [(p["condition"], p["predator"]) for p in report["panels"]] == [
+        ("1p-high", "predator_0"),
+        ("2p-high-shared", "predator_0"),
+        ("2p-high-shared", "predator_1"),
+    ]
+    for panel in report["panels"]:
+        assert list(panel["variants"]) == ["hierarchical", "always_chase", "always_stalk"]
+        for variant in panel["variants"].values():
+            assert variant["seeds"] == [0, 1] and len(variant["values"]) == 2
+            assert variant["mean"] == pytest.approx(sum(variant["values"]) / 2)
+            assert variant["ci"][0] <= variant["mean"] <= variant["ci"][1]
+        for baseline in ("always_chase", "always_stalk"):
+            poi = panel["improvement"][baseline]
+            assert 0.0 <= poi["ci"][0] <= poi["value"] <= poi["ci"][1] <= 1.0
+        seed0 = json.loads(Path(panel["variants"]["hierarchical"]["runs"][0], "eval.json").read_text())
+        index = int(panel["predator"][-1])
+        assert seed0["panels"][index]["trained"] == panel["variants"]["hierarchical"]["values"][0]
+    assert report["summary"]["panels"] == 3 and "hierarchical best" in (out / "report.md").read_text().lower()
+
 
 def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path) -> None:
     out = tmp_path / "sweep"
@@ -88,3 +112,38 @@ def test_bad_sweep_input_is_one_line() -> None:
     assert code == 2 and "expected 'all' or a comma-separated list" in output
     with pytest.raises(ValueError, match="seeds=0"):
         SweepPlan(conditions=("1p-high",), seeds=0)
+
+
+def test_the_ray_backend_gives_the_local_backends_results(tmp_path: Path) -> None:
+    small = ["sweep", "--conditions", "1p-low", "--seeds", "2", "--episodes", "20", "--eval-episodes", "20"]
+    small += ["--workers", "2", "--no-record"]
+    code, output = run_cli(*small, "--backend", "ray", "--out", str(tmp_path / "ray"))
+    assert code == 0 and "2 of 2 runs" in output, output
+    code, output = run_cli(*small, "--out", str(tmp_path / "local"))
+    assert code == 0, output
+    for seed in (0, 1):
+        name = f"runs/1p-low-hierarchical-seed{seed}"
+        for file in ("eval.json", "metrics.jsonl", "config.json"):
+            ray_text = (tmp_path / "ray" / name / file).read_text()
+            local_text = (tmp_path / "local" / name / file).read_text()
+            if file == "config.json":  # the recording ids differ
+                ray_text, local_text = (json.loads(t)["train"] for t in (ray_text, local_text))
+            assert ray_text == local_text, (name, file)
+
+
+def test_the_ray_backend_without_ray_says_which_extra(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray fails as if not installed
+    code, output = run_cli(
+        "sweep",
+        "--conditions",
+        "1p-low",
+        "--seeds",
+        "1",
+        "--episodes",
+        "5",
+        "--backend",
+        "ray",
+        "--out",
+        str(tmp_path / "s"),
+    )
+    assert code == 2 and "pip install 'pursuit-bench[ray]'" in output and "Traceback" not in output

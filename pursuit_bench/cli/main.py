@@ -13,6 +13,7 @@ import ast
 import dataclasses
 import inspect
 import itertools
+import json
 import os
 import shutil
 import subprocess
@@ -75,7 +76,7 @@ def hyperparameter_options(command: Any) -> Any:
 
 
 def training_options(command: Any) -> Any:
-    """The options ``train`` and ``sweep`` share: preset, budget, arenas, backend, recording,
+    """The options ``train`` and ``sweep`` share: preset, budget, arenas, physics, recording,
     checkpoints, log lines."""
     options = [
         click.option(
@@ -93,11 +94,12 @@ def training_options(command: Any) -> Any:
             "--num-envs", type=click.IntRange(min=1), default=8, show_default=True, help="Arenas stepped together."
         ),
         click.option(
-            "--backend",
+            "--physics",
+            "physics",
             type=click.Choice(["pymunk", "numpy"]),
             default="pymunk",
             show_default=True,
-            help="Physics of the arenas: pymunk (the reference) or the numpy twin.",
+            help="Physics backend of the arenas: pymunk (the reference) or the numpy twin.",
         ),
         click.option(
             "--record-every",
@@ -280,7 +282,7 @@ def train(
     predator: str,
     prey: str,
     batched_learners: bool,
-    backend: str,
+    physics: str,
     record_every: int,
     no_record: bool,
     checkpoint_every: int,
@@ -318,7 +320,7 @@ def train(
                 predator=predator,  # type: ignore[arg-type]
                 prey=prey,  # type: ignore[arg-type]
                 batched_learners=batched_learners,
-                backend=backend,  # type: ignore[arg-type]
+                backend=physics,  # type: ignore[arg-type]
             )
         except ValueError as error:
             raise BadInput(str(error)) from None
@@ -502,6 +504,18 @@ def _names(value: str, known: list[str] | tuple[str, ...], what: str) -> tuple[s
     default=None,
     help="Worker processes, each training one stack of runs at a time [the cores].",
 )
+@click.option(
+    "--backend",
+    type=click.Choice(["local", "ray"]),
+    default="local",
+    show_default=True,
+    help="Where stacks run: worker processes here, or Ray tasks (pip install 'pursuit-bench[ray]').",
+)
+@click.option(
+    "--address",
+    default=None,
+    help="With --backend ray: the cluster to join ('auto' or HOST:PORT) [a local Ray instance started for the sweep].",
+)
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="Sweep folder, e.g. sweeps/NAME.")
 @training_options
 def sweep(
@@ -513,7 +527,9 @@ def sweep(
     eval_episodes: int,
     workers: int | None,
     num_envs: int,
+    physics: str,
     backend: str,
+    address: str | None,
     record_every: int,
     no_record: bool,
     checkpoint_every: int,
@@ -541,7 +557,7 @@ def sweep(
             episodes=episodes or agent.episodes,
             eval_episodes=eval_episodes,
             num_envs=num_envs,
-            backend=backend,
+            backend=physics,
             record_every=record_every,
             checkpoint_every=checkpoint_every,
             preset=preset,
@@ -572,14 +588,21 @@ def sweep(
 
     workers = workers or os.cpu_count() or 1
     with SignalCatcher(raise_at_once=False).active() as signals:
-        complete = sweeps.run_sweep(
-            out,
-            plan,
-            workers=workers,
-            record=not no_record,
-            on_message=on_message,
-            should_stop=lambda: signals.signum is not None,
-        )
+        try:
+            complete = sweeps.run_sweep(
+                out,
+                plan,
+                workers=workers,
+                record=not no_record,
+                executor=backend,
+                address=address,
+                on_message=on_message,
+                should_stop=lambda: signals.signum is not None,
+            )
+        except ValueError as error:  # e.g. --backend ray without Ray
+            raise BadInput(str(error)) from None
+        except RuntimeError as error:  # a worker failed: what it had done is kept
+            raise click.ClickException(str(error)) from None
     progress.close()
     if signals.signum is not None:
         stopped = Stopped(signals.signum)
@@ -588,6 +611,37 @@ def sweep(
     click.echo(f"sweep {out}: {len(finished)} of {len(configs)} runs trained and evaluated")
     if not complete:
         raise click.ClickException("some runs are not finished; rerun the same command to go on")
+
+
+@main.command()
+@click.argument("sweep_folder", metavar="SWEEP", type=click.Path(path_type=Path))
+def report(sweep_folder: Path) -> None:
+    """Fig. 2 over seeds from a sweep's run folders: writes fig2.png, curves.png, report.md and
+    report.json into SWEEP."""
+    from pursuit_bench import report as reports
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.plots import curves_png, fig2_png
+
+    try:
+        results = reports.collect(sweep_folder)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    table = reports.panel_table(results)
+    totals = reports.summary(table)
+    curves = reports.curves(results)
+    payload = {"sweep": str(sweep_folder), "summary": totals, "panels": table, "curves": curves}
+    atomic_write_text(sweep_folder / "report.json", json.dumps(payload, indent=2) + "\n")
+    atomic_write_text(sweep_folder / "report.md", reports.markdown(table, totals, sweep_folder))
+    atomic_write_bytes(sweep_folder / "fig2.png", fig2_png(table))
+    if curves:
+        atomic_write_bytes(sweep_folder / "curves.png", curves_png(curves))
+    click.echo(
+        f"{totals['panels']} panels: hierarchical best in {totals['hierarchical_best']}, interval above both "
+        f"baselines in {totals['hierarchical_interval_above_both']}"
+    )
+    click.echo(f"written: {', '.join(str(sweep_folder / n) for n in ('report.md', 'report.json', 'fig2.png'))}")
+    if curves:
+        click.echo(f"         {sweep_folder / 'curves.png'}")
 
 
 #: The first bytes of every Rerun recording.
