@@ -1,6 +1,7 @@
 """The network and the double-DQN learner against hand computations, and a small MDP solved."""
 
 import copy
+import math
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import torch
 
 from pursuit_bench.agents.adam import FlatAdam
 from pursuit_bench.agents.config import QUICK, AgentConfig
-from pursuit_bench.agents.dqn import DQNLearner, double_dqn_targets
+from pursuit_bench.agents.dqn import DQNLearner, double_dqn_targets, wall_features
 from pursuit_bench.agents.network import DuelingQNetwork
 from pursuit_bench.agents.replay import Batch
 
@@ -174,3 +175,19 @@ def test_flat_adam_equals_torch_adam() -> None:
         torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6, msg=name)
     for avg, p in zip(flat.exp_avg, theirs.parameters(), strict=True):
         torch.testing.assert_close(avg, reference.state[p]["exp_avg"], rtol=1e-5, atol=1e-7)
+
+
+def test_wall_features_are_the_own_position_in_the_line_of_sight_frame() -> None:
+    rng = np.random.default_rng(3)
+    obs = rng.uniform(-1, 1, size=(50, 16)).astype(np.float32)
+    obs[0, 4:6] = obs[0, 0:2]  # coincident disks: the LOS is +x
+    got = wall_features(torch.as_tensor(obs)).numpy()
+    assert got.shape == (50, 18) and np.array_equal(got[:, :16], obs)
+    for row, (u, v) in zip(obs, got[:, 16:], strict=True):
+        angle = math.atan2(row[5] - row[1], row[4] - row[0]) if not np.array_equal(row[4:6], row[0:2]) else 0.0
+        # rotate the own position by -angle: its coordinates along and to the left of the LOS
+        expected_u = row[0] * math.cos(angle) + row[1] * math.sin(angle)
+        expected_v = -row[0] * math.sin(angle) + row[1] * math.cos(angle)
+        assert (u, v) == pytest.approx((expected_u, expected_v), abs=1e-5)
+    learner = DQNLearner(16, 12, QUICK.replace(wall_features=True), seed=0)
+    assert learner.online.n_obs == 18 and learner.evaluate(obs[None])[0].shape == (1, 50, 12)

@@ -53,6 +53,10 @@ class AgentConfig:
     """Updates per stored transition (paper: one update per step)."""
     huber_delta: float = 1.0
     """Where the Huber loss turns from quadratic to linear."""
+    wall_features: bool = False
+    """Show each network, beside the paper's observation, the agent's own position in its
+    line-of-sight frame (2 numbers): where the walls lie relative to its 12 directions. Not in
+    the paper (docs/departures.md); off in both presets."""
     episodes: int = 1_000_000
     """Training length in episodes (paper 3.3: 1e6)."""
 

@@ -22,6 +22,22 @@ from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, PrioritizedReplay
 
+#: Inputs added to the observation by ``AgentConfig.wall_features``.
+WALL_FEATURES = 2
+
+
+def wall_features(obs: torch.Tensor) -> torch.Tensor:
+    """``obs`` (…, n_obs) with the agent's own position in its line-of-sight frame appended:
+    ``(u, v)``, u along the LOS (towards the first other agent: a predator's prey, the prey's
+    nearest predator), v to its left; the LOS is +x for coincident disks (docs/departures.md)."""
+    own, target = obs[..., 0:2], obs[..., 4:6]
+    delta = target - own
+    norm = torch.linalg.vector_norm(delta, dim=-1, keepdim=True)
+    los = torch.where(norm > 0, delta / norm.clamp_min(1e-12), torch.tensor([1.0, 0.0]))
+    u = (own * los).sum(dim=-1, keepdim=True)
+    v = own[..., 1:2] * los[..., 0:1] - own[..., 0:1] * los[..., 1:2]
+    return torch.cat([obs, u, v], dim=-1)
+
 
 def double_dqn_targets(
     online_next: torch.Tensor,
@@ -57,8 +73,9 @@ class DQNLearner:
     ) -> None:
         self.config, self.members, self.n_obs, self.n_actions = config, members, n_obs, n_actions
         seeds = member_seeds(seed, members)
-        self.online = DuelingQNetwork(n_obs, n_actions, members=members, seed=seeds)
-        self.target = DuelingQNetwork(n_obs, n_actions, members=members, seed=seeds)
+        n_inputs = n_obs + (WALL_FEATURES if config.wall_features else 0)
+        self.online = DuelingQNetwork(n_inputs, n_actions, members=members, seed=seeds)
+        self.target = DuelingQNetwork(n_inputs, n_actions, members=members, seed=seeds)
         self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
         self.target.requires_grad_(False)
         self.optimizer = FlatAdam(self.online, lr=config.learning_rate)
@@ -86,10 +103,16 @@ class DQNLearner:
     def beta(self) -> float:
         return self.config.beta(self.steps)
 
+    def encode(self, obs: np.ndarray | torch.Tensor) -> torch.Tensor:
+        """What the networks see of observations (…, n_obs): the observations, with the wall
+        features when the config asks for them (the replay keeps the observations)."""
+        tensor = torch.as_tensor(obs, dtype=torch.float32)
+        return wall_features(tensor) if self.config.wall_features else tensor
+
     def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Q-values (M, B, A) and V(s) (M, B) of the online network for observations (M, B, n_obs)."""
         with torch.no_grad():
-            q, value = self.online.q_and_value(torch.as_tensor(obs, dtype=torch.float32))
+            q, value = self.online.q_and_value(self.encode(obs))
         return q.numpy(), value.numpy()
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
@@ -158,7 +181,7 @@ class DQNLearner:
         def stack(name: str, dtype: torch.dtype) -> torch.Tensor:
             return torch.as_tensor(np.stack([getattr(b, name) for b in batches]), dtype=dtype)
 
-        obs, next_obs = stack("obs", torch.float32), stack("next_obs", torch.float32)
+        obs, next_obs = self.encode(stack("obs", torch.float32)), self.encode(stack("next_obs", torch.float32))
         actions = stack("actions", torch.int64)
         rewards, terminated = stack("rewards", torch.float32), stack("terminated", torch.float32)
         weights = stack("weights", torch.float32)

@@ -72,7 +72,7 @@ class LearningAgent:
     def value_features(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The value stream's last hidden layer (B, 32) and V(s) (B,): the paper's Fig. 3 input."""
         with torch.no_grad():
-            hidden, value, _ = self.learner.online.streams(self._own(obs))
+            hidden, value, _ = self.learner.online.streams(self.learner.encode(self._own(obs)))
         return hidden[self.member].numpy(), value[self.member, :, 0].numpy()
 
 
