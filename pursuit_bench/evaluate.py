@@ -9,7 +9,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from pursuit_bench.agents.kinds import HierarchicalPredator, ScriptedAgent
-from pursuit_bench.policies import AlwaysChase, AlwaysStalk
+from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.recording import EpisodeTraces, Recorder
 from pursuit_bench.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.world import Backend
@@ -33,6 +34,8 @@ class Episodes:
     """(E, n_predators) fraction of steps in chase mode."""
     distance: np.ndarray
     """(E, n_agents) distance travelled."""
+    left_area: np.ndarray
+    """(E, n_agents) bool: the agent touched a wall on the episode's last step."""
 
 
 def run_episodes(
@@ -58,7 +61,7 @@ def run_episodes(
     traces = EpisodeTraces(env.core.world.positions, env.config.max_steps) if recorder is not None else None
     chase = np.zeros((env.num_envs, n_pred))
     travelled = np.zeros((env.num_envs, env.n_agents))
-    rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray]] = []
+    rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray, np.ndarray]] = []
     while len(rows) < episodes:
         actions = np.zeros((env.num_envs, env.n_agents, 2), dtype=np.int64)
         q_values = np.full((env.num_envs, n_pred, 2), np.nan)
@@ -85,6 +88,7 @@ def run_episodes(
                     bool(info["captured"][arena]),
                     chase[arena] / length,
                     travelled[arena].copy(),
+                    info["left_area"][arena].copy(),
                 )
             )
             chase[arena] = 0.0
@@ -100,7 +104,13 @@ def run_episodes(
         captured=np.array([r[2] for r in rows]),
         chase_fraction=np.array([r[3] for r in rows]).reshape(len(rows), n_pred),
         distance=np.array([r[4] for r in rows]),
+        left_area=np.array([r[5] for r in rows]).reshape(len(rows), len(names)),
     )
+
+
+def env_max_steps(condition: str) -> int:
+    """The episode limit of a condition."""
+    return CONDITIONS[condition].max_steps
 
 
 def standard_error(values: np.ndarray) -> float:
@@ -125,7 +135,9 @@ def evaluate_agents(
     cumulative reward as trained, then with it replaced by always-chase and by always-stalk,
     the other agents fixed; every variant plays the same seeds. Also the capture rate, time to
     capture, distance travelled and fraction of steps in chase, as trained. The episodes as
-    trained go into ``recorder``.
+    trained go into ``recorder``. With a learning prey, ``prey_check`` compares it, greedy,
+    with ``FleeingPrey`` in its place against the same predators on the same seeds: return,
+    wall exits, captures, survival to the time limit.
 
     Each panel holds the mean returns ``trained`` (the predator as trained), ``always_chase``
     and ``always_stalk``, their standard errors and every episode's return (``stderr``,
@@ -156,6 +168,26 @@ def evaluate_agents(
             }
         )
     captured = trained.captured
+    prey_check = None
+    if prey_epsilon is not None:  # a learning prey: greedy, and the scripted one in its place
+        greedy = run_episodes(condition, agents, episodes, seed=seed, num_envs=num_envs, backend=backend)
+        fleeing = run_episodes(
+            condition,
+            {**agents, prey: ScriptedAgent(prey, FleeingPrey())},
+            episodes,
+            seed=seed,
+            num_envs=num_envs,
+            backend=backend,
+        )
+        prey_check = {
+            name: {
+                "return": float(played.returns[:, -1].mean()),
+                "left_area": float(played.left_area[:, -1].mean()),
+                "captured": float(played.captured.mean()),
+                "survived": float((played.lengths == env_max_steps(condition)).mean()),
+            }
+            for name, played in (("learned_greedy", greedy), ("fleeing_prey", fleeing))
+        }
     return {
         "condition": condition,
         "episodes": episodes,
@@ -169,4 +201,5 @@ def evaluate_agents(
         "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
         "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
         "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon},
+        "prey_check": prey_check,
     }

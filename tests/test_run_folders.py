@@ -155,6 +155,11 @@ def test_a_flat_or_scripted_predator_is_named_by_its_kind(tmp_path: Path) -> Non
         panel = result["panels"][0]
         assert result["predator_kind"] == kind and result["training"]["predator"] == kind
         assert set(panel) == {"predator", "trained", "always_chase", "always_stalk", "stderr", "episode_returns"}
+        check = result["prey_check"]  # the learned prey, greedy, beside FleeingPrey in its place
+        assert set(check) == {"learned_greedy", "fleeing_prey"}
+        for row in check.values():
+            assert -2.0 <= row["return"] <= 0.0 and 0.0 <= row["left_area"] <= 1.0
+            assert row["return"] <= -max(row["left_area"], row["captured"]) + 1e-9  # −1 per capture or exit
         for variant in ("trained", "always_chase", "always_stalk"):
             assert len(panel["episode_returns"][variant]) == 4
             assert abs(sum(panel["episode_returns"][variant]) / 4 - panel[variant]) < 1e-5
