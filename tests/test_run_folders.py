@@ -79,6 +79,9 @@ def test_resume_alone_takes_the_saved_configuration(tmp_path: Path) -> None:
 
     code, output = run_cli("train", "--out", str(out), "--resume", "--episodes", "14", "--learning-rate", "0.0005")
     assert code == 0 and "extending the run from 8 to 14 episodes" in output, output
+    # not a terminal: progress comes as lines with every agent's return, the capture rate and ε
+    assert "episode 14/14 (100%)" in output and "return predator_0 " in output and "prey_0 " in output
+    assert "capture " in output and "ε " in output
     assert runs.read_config(out)[0].episodes == 14
     rows = [json.loads(line) for line in (out / "metrics.jsonl").read_text().splitlines()]
     assert [r["episode"] for r in rows] == list(range(1, 15))
