@@ -49,11 +49,14 @@ def run_episodes(
     backend: Backend = "pymunk",
     recorder: Recorder | None = None,
     record: Callable[[int], bool] = lambda episode: True,
+    on_step: Callable[[np.ndarray, np.ndarray, np.ndarray], None] | None = None,
 ) -> Episodes:
     """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
     ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
     ``recorder``, the episodes numbered (from 1, in the order they end) where ``record`` says so
-    go into it, with the hierarchical predators' Q-values and V(s)."""
+    go into it, with the hierarchical predators' Q-values and V(s). ``on_step(obs, actions,
+    done)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
+    (B, n_agents, 2) and which arenas' episodes the step ended (B,)."""
     env = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend)
     epsilons = epsilons or {}
     names, n_pred = env.agents, env.n_agents - 1
@@ -74,7 +77,10 @@ def run_episodes(
                 chosen = np.asarray(actor.act_batch(obs[:, i], explore=eps is not None, epsilon=eps))
             put_actions(actions, i, chosen)
         before = env.core.world.positions.copy()
+        acted_on = obs
         obs, rewards, _, truncated, info = env.step(actions)
+        if on_step is not None:
+            on_step(acted_on, actions, info["done"])
         travelled += np.hypot(*(info["positions"] - before).transpose(2, 0, 1))
         chase += actions[:, :-1, 0]
         if traces is not None:

@@ -9,6 +9,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only: no display needed
 import matplotlib.pyplot as plt
+import numpy as np
 
 BASELINES = (("always_chase", "always chase", "#dd8452"), ("always_stalk", "always stalk", "#55a868"))
 TRAINED_COLOR = "#4c72b0"
@@ -126,5 +127,57 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     fig.suptitle(
         "Learning curves: mean over seeds, 95 % bootstrap band\nsolid: hierarchical, dashed: flat", fontsize=10
     )
+    fig.tight_layout()
+    return _png(fig)
+
+
+def fig3_png(analysis: dict[str, Any], embeddings: dict[str, Any], closest: dict[str, Any]) -> bytes:
+    """The paper's Fig. 3: for each predator, its value stream's t-SNE embedding coloured by
+    V(s), by its distance to the prey and, with other predators, by whether it is the closest."""
+    names = list(embeddings)
+    several = len(names) > 1
+    columns = 3 if several else 2
+    fig, axes = plt.subplots(len(names), columns, figsize=(4.2 * columns, 3.8 * len(names)), squeeze=False)
+    for row, name in enumerate(names):
+        xy = embeddings[name]["xy"]
+        score = analysis[name]["organisation"]
+        panels = [
+            (embeddings[name]["value"], "viridis", f"{name}: V(s) (organisation R² {score['value']:.2f})"),
+            (embeddings[name]["distance"], "magma", f"{name}: distance to prey (R² {score['distance']:.2f})"),
+        ]
+        if several:
+            panels.append((closest[name].astype(float), "coolwarm", f"{name}: closest to the prey (red)"))
+        for ax, (colour, cmap, title) in zip(axes[row], panels, strict=True):
+            points = ax.scatter(xy[:, 0], xy[:, 1], c=colour, cmap=cmap, s=4, linewidths=0)
+            ax.set_title(title, fontsize=9)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            fig.colorbar(points, ax=ax, fraction=0.046, pad=0.02)
+    fig.suptitle("t-SNE of the value stream's last hidden layer", fontsize=10)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
+    """P(chase) against distance to the prey, one line per curve (with its 95 % band when
+    given), and the number of states behind each point as bars below."""
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.2), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    colors = plt.get_cmap("tab10")
+    for k, (label, curve) in enumerate(curves.items()):
+        bins = np.asarray(curve["bins"])
+        centres = (bins[:-1] + bins[1:]) / 2
+        p = np.array([np.nan if v is None else v for v in curve["p_chase"]], dtype=float)
+        top.plot(centres, p, "o-", color=colors(k), ms=3, label=label)
+        if curve.get("ci") is not None:
+            low, high = (np.array([np.nan if v is None else v for v in c], dtype=float) for c in curve["ci"])
+            top.fill_between(centres, low, high, color=colors(k), alpha=0.15, lw=0)
+        width = (bins[1] - bins[0]) / (len(curves) + 1)
+        bottom.bar(centres + (k - len(curves) / 2) * width, curve["states"], width=width, color=colors(k))
+    top.set_ylabel("P(chase)")
+    top.set_ylim(-0.02, 1.02)
+    top.legend(fontsize=8)
+    top.set_title(title, fontsize=10)
+    bottom.set_ylabel("states")
+    bottom.set_xlabel("distance to the prey")
     fig.tight_layout()
     return _png(fig)

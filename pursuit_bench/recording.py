@@ -457,3 +457,69 @@ class RecordEpisodes(BaseParallelWrapper):
     def close(self) -> None:
         self.recorder.close()
         self.env.close()
+
+
+def record_embedding(
+    path: str | os.PathLike[str],
+    agent_names: list[str],
+    predator: str,
+    embedding: np.ndarray,
+    values: np.ndarray,
+    positions: np.ndarray,
+    config: dict[str, Any],
+) -> None:
+    """``analysis.rrd``: one predator's t-SNE embedding as points coloured by V(s), each
+    labelled with its state's number (hover to read it), and on a ``state`` timeline the
+    current state enlarged in the embedding beside the arena in that state: scrub the timeline
+    (or go to a point's number) to see the situation behind a point.
+
+    Args:
+        embedding: (N, 2) the embedded states' coordinates.
+        values: (N,) their V(s).
+        positions: (N, n_agents, 2) every agent's position in each state.
+    """
+    stream = rr.RecordingStream(APPLICATION_ID, recording_id=Path(path).stem)
+    blueprint = rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial2DView(
+                name=f"Embedding of {predator}'s value stream (colour: V(s))",
+                origin="/embedding",
+            ),
+            rrb.Spatial2DView(name="The state", origin="/arena"),
+        ),
+        rrb.TimePanel(timeline="state", state="expanded"),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+    )
+    stream.save(Path(path), default_blueprint=blueprint)
+    h = HALF_SIZE
+    square = [[-h, -h], [h, -h], [h, h], [-h, h], [-h, -h]]
+    stream.log("arena/walls", rr.LineStrips2D([square], colors=[WALL_RGB], radii=0.012), static=True)
+    stream.log("arena/agents", rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
+    span = float(np.ptp(values)) or 1.0
+    shade = (values - values.min()) / span
+    colors = np.stack([0.2 + 0.8 * shade, 0.3 + 0.5 * (1 - abs(2 * shade - 1)), 1.0 - 0.8 * shade], axis=1) * 255
+    index = [rr.TimeColumn("state", sequence=np.arange(len(values)))]
+    xy = embedding.astype(np.float32)
+    stream.log(
+        "embedding/states",
+        rr.Points2D(xy, colors=colors.astype(np.uint8), radii=0.4, labels=[f"state {k}" for k in range(len(xy))]),
+        static=True,
+    )
+    current = rr.Points2D.columns(
+        positions=xy, radii=np.full(len(xy), 1.5), colors=np.tile([255, 255, 255], (len(xy), 1))
+    )
+    stream.send_columns("embedding/current", indexes=index, columns=current)
+    for i, name in enumerate(agent_names):
+        color = PREY_RGB if name.startswith("prey") else PREDATOR_RGB
+        stream.log(f"arena/agents/{name}", rr.Points2D.from_fields(radii=RADIUS, colors=[_rgba(color)]), static=True)
+        stream.send_columns(
+            f"arena/agents/{name}",
+            indexes=index,
+            columns=rr.Points2D.columns(positions=positions[:, i].astype(np.float32)),
+        )
+    stream.send_columns("values", indexes=index, columns=rr.Scalars.columns(scalars=values.astype(np.float64)))
+    text = f"# {config.get('condition', '')}: {predator}\n\n```json\n{json.dumps(config, indent=2, default=str)}\n```\n"
+    stream.log("config", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+    stream.flush()
+    stream.disconnect()

@@ -76,6 +76,10 @@ def test_resume_alone_takes_the_saved_configuration(tmp_path: Path) -> None:
     assert code == 2 and "--learning-rate 0.001 disagrees with the run's 0.0005" in output, output
     code, output = run_cli("train", "--out", str(out), "--resume", "--condition", "1p-high")
     assert code == 2 and "--condition 1p-high disagrees with the run's 1p-low" in output
+    code, output = run_cli("train", "--out", str(out), "--resume", "--physics", "numpy")
+    assert code == 2 and "--physics numpy disagrees with the run's pymunk" in output
+    code, output = run_cli("train", "--out", str(out), "--resume", "--physics", "pymunk", "--seed", "0")
+    assert code == 0 and "nothing to do" in output, output
 
     code, output = run_cli("train", "--out", str(out), "--resume", "--episodes", "14", "--learning-rate", "0.0005")
     assert code == 0 and "extending the run from 8 to 14 episodes" in output, output

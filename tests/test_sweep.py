@@ -75,6 +75,12 @@ def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alon
         assert seed0["panels"][index]["trained"] == panel["variants"]["hierarchical"]["values"][0]
     assert report["summary"]["panels"] == 3 and "hierarchical best" in (out / "report.md").read_text().lower()
 
+    code, output = run_cli("analyze", str(out), "--episodes", "6")  # chasing across costs, over seeds
+    assert code == 0 and "2 predators, high cost: 2 runs" in output, output
+    analysis = json.loads((out / "analysis.json").read_text())
+    assert set(analysis) == {"1 predator, high cost", "2 predators, high cost"}
+    assert all(len(a["p_chase"]) == 20 for a in analysis.values()) and (out / "modes.png").stat().st_size > 10_000
+
 
 def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path) -> None:
     out = tmp_path / "sweep"

@@ -169,6 +169,7 @@ def _resumed_config(
     saved_values: dict[str, Any] = {f.name: getattr(saved, f.name) for f in dataclasses.fields(saved)}
     saved_values.update(saved.agent.to_dict())
     saved_values.update(settings)
+    saved_values["physics"] = saved.backend  # the option's name for TrainConfig.backend
     for name in sorted(_options_given(ctx) - RUNTIME_OPTIONS):
         given, was = ctx.params[name], saved_values.get(name)
         if given != was:
@@ -642,6 +643,143 @@ def report(sweep_folder: Path) -> None:
     click.echo(f"written: {', '.join(str(sweep_folder / n) for n in ('report.md', 'report.json', 'fig2.png'))}")
     if curves:
         click.echo(f"         {sweep_folder / 'curves.png'}")
+
+
+@main.command()
+@click.argument("folder", metavar="RUN", type=click.Path(path_type=Path))
+@click.option("--episodes", type=click.IntRange(min=1), default=200, show_default=True, help="Episodes to play.")
+@click.option(
+    "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seeds the episodes and the t-SNE."
+)
+def analyze(folder: Path, episodes: int, seed: int) -> None:
+    """What the trained predators' value streams represent and when they chase (Fig. 3).
+
+    On a run folder: fig3.png, modes.png, analysis.json and analysis.rrd. On a sweep folder:
+    P(chase | distance) and the chase-onset distance for low against high chase cost, per number
+    of predators, over seeds: modes.png and analysis.json in the sweep folder."""
+    import torch
+
+    from pursuit_bench import runs
+
+    torch.set_num_threads(1)
+    if (folder / "sweep.json").is_file():
+        _analyze_sweep(folder, episodes, seed)
+        return
+    try:
+        runs.read_config(folder)
+        with runs.locked(folder):
+            _analyze_run(folder, episodes, seed)
+    except ValueError as error:  # RunBusy, not a run folder, not trained
+        raise BadInput(str(error)) from None
+
+
+def _analyze_run(folder: Path, episodes: int, seed: int) -> dict[str, Any]:
+    import numpy as np
+
+    from pursuit_bench import analysis, runs
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.plots import fig3_png, modes_png
+    from pursuit_bench.recording import record_embedding
+
+    config, _ = runs.read_config(folder)
+    agents = runs.load_agents(folder)
+    states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed)  # type: ignore[arg-type]
+    if not states:
+        raise ValueError(f"{folder}: its predators are {config.predator}, not hierarchical: nothing to analyse")
+    result, embeddings = analysis.analyse(states, seed)
+    shown = {}
+    for name, picked in embeddings.items():
+        index = picked[:, 0].astype(int)
+        shown[name] = {
+            "xy": picked[:, 1:],
+            "value": states[name].value[index],
+            "distance": states[name].distance[index],
+        }
+        result[name]["embedding"] = {"state": index.tolist(), "xy": np.round(picked[:, 1:], 3).tolist()}
+    payload = {"condition": config.condition, "episodes": episodes, "seed": seed, "predators": result}
+    closest = {name: states[name].closest[embeddings[name][:, 0].astype(int)] for name in embeddings}
+    atomic_write_bytes(folder / "fig3.png", fig3_png(result, shown, closest))
+    curves = {name: result[name]["chase_by_distance"] for name in result}
+    atomic_write_bytes(folder / "modes.png", modes_png(curves, f"{config.condition}: P(chase) by distance to the prey"))
+    first = next(iter(embeddings))
+    index = embeddings[first][:, 0].astype(int)
+    partial = folder / ".analysis.rrd.tmp"
+    record_embedding(
+        partial,
+        list(agents),
+        first,
+        embeddings[first][:, 1:],
+        states[first].value[index],
+        states[first].positions[index],
+        {"condition": config.condition, "episodes": episodes, "seed": seed},
+    )
+    os.replace(partial, folder / "analysis.rrd")
+    atomic_write_text(folder / "analysis.json", json.dumps(payload) + "\n")
+    for name, r in result.items():
+        onset = r["chase_onset_distance"]
+        median = f"{onset['median']:.2f}" if onset["median"] is not None else "–"
+        click.echo(
+            f"{name}: organisation by distance R² {r['organisation']['distance']:.2f}, by V(s) "
+            f"{r['organisation']['value']:.2f}; P(chase) {r['p_chase']:.2f}; chase bouts start at {median} (median)"
+        )
+    click.echo(f"written: fig3.png, modes.png, analysis.json, analysis.rrd in {folder}")
+    return payload
+
+
+def _analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> None:
+    import numpy as np
+
+    from pursuit_bench import analysis, runs
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.plots import modes_png
+    from pursuit_bench.report import interval
+
+    groups: dict[tuple[int, str], list[tuple[np.ndarray, list[float], Any]]] = {}
+    for folder in sorted((sweep_folder / "runs").glob("*-hierarchical-seed*")):
+        try:
+            config, _ = runs.read_config(folder)
+            agents = runs.load_agents(folder)
+        except ValueError:
+            continue  # not trained yet
+        states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed)  # type: ignore[arg-type]
+        condition = CONDITIONS[config.condition]
+        cost = "low" if condition.chase_cost < 0.05 else "high"
+        distance = np.concatenate([s.distance for s in states.values()])
+        mode = np.concatenate([s.mode for s in states.values()])
+        binned = analysis.chase_by_distance(distance, mode)
+        onsets = [float(np.median(s.onsets)) for s in states.values() if len(s.onsets)]
+        groups.setdefault((condition.n_predators, cost), []).append(
+            (np.array([np.nan if v is None else v for v in binned["p_chase"]]), onsets, binned["states"])
+        )
+    if not groups:
+        raise BadInput(f"{sweep_folder}: no trained hierarchical run to analyse")
+    result, curves = {}, {}
+    for (n, cost), rows in sorted(groups.items()):
+        table = np.stack([r[0] for r in rows])  # (seeds, bins)
+        mean = [None if np.isnan(c).all() else float(np.nanmean(c)) for c in table.T]
+        cis = [interval(c[~np.isnan(c)]) if (~np.isnan(c)).sum() > 1 else None for c in table.T]
+        onset = np.array([o for r in rows for o in r[1]])
+        label = f"{n} predator{'s' if n > 1 else ''}, {cost} cost"
+        result[label] = {
+            "runs": len(rows),
+            "p_chase": mean,
+            "p_chase_ci": cis,
+            "chase_onset_median": float(np.median(onset)) if len(onset) else None,
+            "chase_onset_ci": interval(onset) if len(onset) > 1 else None,
+        }
+        curves[label] = {
+            "bins": analysis.DISTANCE_BINS.tolist(),
+            "p_chase": mean,
+            "states": np.sum([r[2] for r in rows], axis=0).tolist(),
+            "ci": [[None if c is None else c[0] for c in cis], [None if c is None else c[1] for c in cis]],
+        }
+    atomic_write_text(sweep_folder / "analysis.json", json.dumps(result, indent=2) + "\n")
+    title = "P(chase) by distance, low against high chase cost (mean over seeds, 95 % interval)"
+    atomic_write_bytes(sweep_folder / "modes.png", modes_png(curves, title))
+    for label, r in result.items():
+        median = f"{r['chase_onset_median']:.2f}" if r["chase_onset_median"] is not None else "–"
+        click.echo(f"{label}: {r['runs']} runs, chase bouts start at {median} (median)")
+    click.echo(f"written: modes.png, analysis.json in {sweep_folder}")
 
 
 #: The first bytes of every Rerun recording.
