@@ -15,13 +15,7 @@ from pursuit_bench.navigation import parallel_navigation
 from pursuit_bench.policies import AlwaysChase, FleeingPrey
 from pursuit_bench.train import TrainConfig, Trainer
 
-
-@pytest.fixture(autouse=True)
-def one_thread():
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 def observations(n: int = 32, agents: int = 2) -> np.ndarray:

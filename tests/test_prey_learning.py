@@ -1,7 +1,6 @@
 """The prey learns: against a fixed always-stalk predator its training return rises."""
 
 import numpy as np
-import torch
 
 from pursuit_bench.agents.config import QUICK
 from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
@@ -11,8 +10,7 @@ from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
 MARGIN = 0.2
 
 
-def test_the_prey_learns_to_survive_a_fixed_stalker() -> None:
-    torch.set_num_threads(1)
+def test_the_prey_learns_to_survive_a_fixed_stalker(one_thread) -> None:
     config = TrainConfig(
         condition="1p-high",
         agent=QUICK.replace(learning_rate=3e-5, target_update_every=2000),

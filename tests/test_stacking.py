@@ -29,12 +29,7 @@ def weights(trainer: Trainer, run: int) -> dict[str, dict[str, torch.Tensor]]:
     return {name: agent["learner"]["online"] for name, agent in trainer.state_dict(run)["agents"].items()}
 
 
-@pytest.fixture(autouse=True)
-def one_thread():
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+pytestmark = pytest.mark.usefixtures("one_thread")
 
 
 @pytest.mark.parametrize("condition", ["1p-high", "2p-low-individual"])
