@@ -6,4 +6,4 @@ cd "$(dirname "$0")/.."
 bash scripts/install.sh test
 .venv/bin/pursuit-bench train --condition 1p-high --episodes 1000 --out runs/demo --force
 .venv/bin/pursuit-bench eval runs/demo --episodes 1000
-echo "open the recordings with: .venv/bin/pursuit-bench view runs/demo/eval.rrd (or runs/demo/train.rrd)"
+echo "open the recordings with: .venv/bin/pursuit-bench view runs/demo"
