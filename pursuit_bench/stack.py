@@ -54,7 +54,8 @@ def train_stack(
     """Train the runs of ``stack`` as one until each has its episodes, or until ``should_stop()``
     (then every unfinished run is checkpointed). ``on_episode(k, record)`` hears each episode
     of run k. Returns whether every run finished."""
-    todo = [r for r in stack if r.episodes_done < r.config.episodes]
+    places = [k for k, r in enumerate(stack) if r.episodes_done < r.config.episodes]
+    todo = [stack[k] for k in places]
     if not todo:
         return True
     recorders: list[Recorder | None] = []
@@ -77,7 +78,7 @@ def train_stack(
         def write(record: EpisodeRecord) -> None:
             metrics[k].write(json.dumps(record.as_row()) + "\n")
             if on_episode is not None:
-                on_episode(k, record)
+                on_episode(places[k], record)
 
         return write
 

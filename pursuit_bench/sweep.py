@@ -11,6 +11,7 @@ on SIGINT or SIGTERM, or when the process that started it is gone.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -165,8 +166,6 @@ def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -
     evaluate each. Sends ``("episode", name, n)`` as episodes finish and ``("done", name,
     None)`` when a run is trained and evaluated into ``messages``. Stops, checkpointing, on
     SIGINT, SIGTERM or when its parent process is gone."""
-    import contextlib
-
     import torch
 
     from pursuit_bench.signals import SignalCatcher
@@ -196,8 +195,8 @@ def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -
         for group in by_step.values():
             group_names = [name for name, _ in group]
 
-            def report(k: int, record: Any, group_names: list[str] = group_names) -> None:
-                messages.put(("episode", group_names[k], record.episode))
+            def report(k: int, episode: Any, group_names: list[str] = group_names) -> None:
+                messages.put(("episode", group_names[k], episode.episode))
 
             train_stack([run for _, run in group], record=record, should_stop=should_stop, on_episode=report)
             if should_stop():
