@@ -479,11 +479,15 @@ def record_embedding(
         positions: (N, n_agents, 2) every agent's position in each state.
     """
     stream = rr.RecordingStream(APPLICATION_ID, recording_id=Path(path).stem)
+    low, high = embedding.min(axis=0), embedding.max(axis=0)
+    margin = 0.05 * (high - low) + 1.0
+    bounds = [[float(low[k] - margin[k]), float(high[k] + margin[k])] for k in (0, 1)]
     blueprint = rrb.Blueprint(
         rrb.Horizontal(
             rrb.Spatial2DView(
                 name=f"Embedding of {predator}'s value stream (colour: V(s))",
                 origin="/embedding",
+                visual_bounds=rrb.VisualBounds2D(x_range=bounds[0], y_range=bounds[1]),
             ),
             rrb.Spatial2DView(name="The state", origin="/arena"),
         ),
