@@ -114,11 +114,6 @@ def run_episodes(
     )
 
 
-def env_max_steps(condition: str) -> int:
-    """The episode limit of a condition."""
-    return CONDITIONS[condition].max_steps
-
-
 def standard_error(values: np.ndarray) -> float:
     """The standard error of the mean of ``values`` (0 for a single value)."""
     return float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
@@ -190,7 +185,7 @@ def evaluate_agents(
                 "return": float(played.returns[:, -1].mean()),
                 "left_area": float(played.left_area[:, -1].mean()),
                 "captured": float(played.captured.mean()),
-                "survived": float((played.lengths == env_max_steps(condition)).mean()),
+                "survived": float((played.lengths == CONDITIONS[condition].max_steps).mean()),
             }
             for name, played in (("learned_greedy", greedy), ("fleeing_prey", fleeing))
         }

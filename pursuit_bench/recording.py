@@ -184,6 +184,16 @@ def _rgba(rgb: tuple[int, int, int]) -> int:
     return (r << 24) | (g << 16) | (b << 8) | 0xFF
 
 
+def _log_arena(stream: rr.RecordingStream, groups: tuple[str, ...]) -> None:
+    """The arena's walls, and a y flip on ``arena/<group>`` (the viewer's 2D y axis points
+    down, the world's up)."""
+    h = HALF_SIZE
+    square = [[-h, -h], [h, -h], [h, h], [-h, h], [-h, -h]]
+    stream.log("arena/walls", rr.LineStrips2D([square], colors=[WALL_RGB], radii=0.012), static=True)
+    for group in groups:
+        stream.log(f"arena/{group}", rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
+
+
 def default_blueprint() -> rrb.Blueprint:
     """The layout a file opens with: the arena left; rewards and returns, modes and events right,
     over the last 30 s up to the time cursor; Q-values, training curves and the configuration in
@@ -265,11 +275,7 @@ class Recorder:
 
     def _log_static(self, config: dict[str, Any]) -> None:
         s = self._stream
-        h = HALF_SIZE
-        square = [[-h, -h], [h, -h], [h, h], [-h, h], [-h, -h]]
-        s.log("arena/walls", rr.LineStrips2D([square], colors=[WALL_RGB], radii=0.012), static=True)
-        for group in ("agents", "trails"):  # the viewer's 2D y axis points down; the world's up
-            s.log(f"arena/{group}", rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
+        _log_arena(s, ("agents", "trails"))
         for name in self.names:
             color = _rgba(PREY_RGB if name.startswith("prey") else PREDATOR_RGB)
             s.log(
@@ -496,10 +502,7 @@ def record_embedding(
         rrb.SelectionPanel(state="collapsed"),
     )
     stream.save(Path(path), default_blueprint=blueprint)
-    h = HALF_SIZE
-    square = [[-h, -h], [h, -h], [h, h], [-h, h], [-h, -h]]
-    stream.log("arena/walls", rr.LineStrips2D([square], colors=[WALL_RGB], radii=0.012), static=True)
-    stream.log("arena/agents", rr.Transform3D(scale=[1.0, -1.0, 1.0]), static=True)
+    _log_arena(stream, ("agents",))
     span = float(np.ptp(values)) or 1.0
     shade = (values - values.min()) / span
     colors = np.stack([0.2 + 0.8 * shade, 0.3 + 0.5 * (1 - abs(2 * shade - 1)), 1.0 - 0.8 * shade], axis=1) * 255

@@ -132,14 +132,16 @@ def keep_metrics(folder: Path, episodes: int) -> None:
     atomic_write_text(path, "".join(r + "\n" for r in rows))
 
 
-def load_agents(folder: str | os.PathLike[str]) -> dict[str, LearningAgent | ScriptedAgent]:
+def load_agents(
+    folder: str | os.PathLike[str], state: dict[str, Any] | None = None
+) -> dict[str, LearningAgent | ScriptedAgent]:
     """The agents of a trained run folder by name (``predator_0`` …, ``prey_0``), with the
     weights of its last checkpoint, ready for ``act(observation)`` and
     :func:`~pursuit_bench.evaluate.evaluate_agents`. ``ValueError`` if the folder holds no
-    trained run."""
+    trained run. ``state``: the folder's checkpoint, if the caller has read it already."""
     folder = Path(folder)
     config, _ = read_config(folder)
-    state = load_checkpoint(folder)
+    state = state if state is not None else load_checkpoint(folder)
     _, (agents,) = build_agents([config], [obs_size(len(CONDITIONS[config.condition].agent_names))])
     load_agents_state(agents, state, config.condition)
     return agents

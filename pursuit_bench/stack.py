@@ -144,8 +144,8 @@ def evaluate_folder(
     previous ones as they were. Returns the result."""
     paths = runs.eval_paths(folder, tag)
     config, _ = runs.read_config(folder)
-    agents = runs.load_agents(folder)
     state = runs.load_checkpoint(folder)
+    agents = runs.load_agents(folder, state)
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder = None
     try:

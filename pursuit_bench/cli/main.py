@@ -20,7 +20,6 @@ import subprocess
 import sys
 import textwrap
 import uuid
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -216,13 +215,13 @@ def _prepare_folder(out: Path, config: TrainConfig, settings: dict[str, Any], re
     return None
 
 
-def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: Callable[[], float]) -> str:
+def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: float) -> str:
     """The last 100 episodes: every agent's mean return, the capture rate, ε."""
     if not captures:
         return "no episode finished yet"
     parts = [f"{name} {sum(r[-100:]) / len(r[-100:]):+.2f}" for name, r in returns.items()]
     recent = captures[-100:]
-    return f"return {' '.join(parts)} | capture {sum(recent) / len(recent):.0%} | ε {epsilon():.2f}"
+    return f"return {' '.join(parts)} | capture {sum(recent) / len(recent):.0%} | ε {epsilon:.2f}"
 
 
 @main.command()
@@ -382,7 +381,7 @@ def _train_run(
         f"training {config.condition}",
         config.episodes,
         run.episodes_done,
-        lambda: _describe(returns, captures, lambda: last["epsilon"]),
+        lambda: _describe(returns, captures, last["epsilon"]),
         every_episodes=log_every,
     )
     train_stack([run], record=record, should_stop=lambda: signals.signum is not None, on_episode=on_episode)
@@ -567,8 +566,9 @@ def sweep(
     except ValueError as error:
         raise BadInput(str(error)) from None
     configs = plan.runs()
-    done = {name: sweeps.run_status(out / "runs" / name, c)[0] for name, c in configs.items()}
-    finished = {name for name, c in configs.items() if sweeps.run_status(out / "runs" / name, c)[1]}
+    status = {name: sweeps.run_status(out / "runs" / name, c) for name, c in configs.items()}
+    done = {name: episodes for name, (episodes, _) in status.items()}
+    finished = {name for name, (_, evaluated) in status.items() if evaluated}
     total = sum(c.episodes for c in configs.values())
     start, start_done = time.monotonic(), sum(done.values())
 
