@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from pursuit_bench import runs
+from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.evaluate import evaluate_agents
 from pursuit_bench.files import atomic_write_bytes, atomic_write_text
@@ -139,13 +140,38 @@ def evaluate_folder(
     tag: str | None = None,
 ) -> dict[str, Any]:
     """Evaluate a trained run folder (its lock held by the caller) by the paper's protocol and
-    write ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*``) together: each is written
-    under a temporary name and renamed when all are complete, so an interruption leaves the
-    previous ones as they were. Returns the result."""
-    paths = runs.eval_paths(folder, tag)
+    write ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*``) into it: see
+    :func:`evaluate_into`. Returns the result."""
     config, _ = runs.read_config(folder)
     state = runs.load_checkpoint(folder)
     agents = runs.load_agents(folder, state)
+    return evaluate_into(
+        runs.eval_paths(folder, tag),
+        config,
+        agents,
+        {"trained_episodes": int(state["episodes_done"]), "tag": tag},
+        episodes=episodes,
+        seed=seed,
+        num_envs=num_envs,
+        record=record,
+    )
+
+
+def evaluate_into(
+    paths: dict[str, Path],
+    config: TrainConfig,
+    agents: dict[str, LearningAgent | ScriptedAgent],
+    about: dict[str, Any],
+    *,
+    episodes: int,
+    seed: int,
+    num_envs: int = 64,
+    record: bool = True,
+) -> dict[str, Any]:
+    """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
+    (with ``about`` and the training config), its bar chart and a recording to ``paths``
+    (``runs.eval_paths``) together: each is written under a temporary name and renamed when all
+    are complete, so an interruption leaves the previous ones as they were."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder = None
     try:
@@ -163,7 +189,7 @@ def evaluate_folder(
             backend=config.backend,
             predator_kind=config.predator,
         )
-        result.update({"trained_episodes": int(state["episodes_done"]), "training": config.to_dict(), "tag": tag})
+        result.update({**about, "training": config.to_dict()})
         if recorder is not None:
             recorder.close()
         atomic_write_bytes(partial["png"], reward_bars_png(result))

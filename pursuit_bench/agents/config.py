@@ -1,8 +1,9 @@
-"""Every hyper-parameter of the learning agents, and the two presets.
+"""Every hyper-parameter of the learning agents, and the presets.
 
 ``paper`` is the spec's (docs/spec.md) values (paper 3.3, authors' code). ``quick`` is ours, tuned so that the main
 result (a hierarchical predator beating the always-chase baseline) shows on a 2-core machine in
-minutes; see the field docstrings and README for why each value differs.
+minutes; see the field docstrings and README for why each value differs. ``reproduction`` is
+``quick`` changed so that the prey learns too (docs/learning.md); REPRODUCTION.md runs it.
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ class AgentConfig:
     wall_features: bool = False
     """Show each network, beside the paper's observation, the agent's own position in its
     line-of-sight frame (2 numbers): where the walls lie relative to its 12 directions. Not in
-    the paper (docs/departures.md); off in both presets."""
+    the paper (docs/departures.md)."""
     episodes: int = 1_000_000
     """Training length in episodes (paper 3.3: 1e6)."""
 
@@ -128,4 +129,9 @@ QUICK = PAPER.replace(
     episodes=2_000,
 )
 
-PRESETS: dict[str, AgentConfig] = {"paper": PAPER, "quick": QUICK}
+#: Ours, for both sides learning (docs/learning.md, REPRODUCTION.md): ``quick`` with a 30× smaller
+#: step size (at 1e-3 the prey never learns), target copies every 2000 transitions (the authors'
+#: value) and the wall features, so that the prey can learn where the walls are.
+REPRODUCTION = QUICK.replace(learning_rate=3e-5, target_update_every=2_000, wall_features=True, episodes=1_500)
+
+PRESETS: dict[str, AgentConfig] = {"paper": PAPER, "quick": QUICK, "reproduction": REPRODUCTION}

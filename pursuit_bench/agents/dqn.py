@@ -192,11 +192,27 @@ class DQNLearner:
         per_sample = F.huber_loss(q, y, reduction="none", delta=self.config.huber_delta)
         return (weights * per_sample).mean(dim=1), q - y
 
+    def member_weights(self, m: int) -> dict[str, torch.Tensor]:
+        """Member m's online network: its parameters by name, without the member axis."""
+        return {k: v[m].clone() for k, v in self.online.state_dict().items()}
+
+    def load_member_weights(self, m: int, weights: dict[str, torch.Tensor]) -> None:
+        """Give member m these online weights (:meth:`member_weights`), its target net too;
+        ``ValueError`` if a name or a shape differs from this learner's network."""
+        ours = {k: tuple(v.shape[1:]) for k, v in self.online.state_dict().items()}
+        theirs = {k: tuple(v.shape) for k, v in weights.items()}
+        if ours != theirs:
+            raise ValueError(f"weights of shapes {theirs}: expected {ours}")
+        with torch.no_grad():
+            for net in (self.online, self.target):
+                for name, tensor in net.state_dict().items():
+                    tensor[m] = weights[name]
+
     def member_state(self, m: int) -> dict[str, Any]:
         """Member m's parameters, target, Adam moments, replay and counters, as plain data."""
         adam = self.optimizer
         return {
-            "online": {k: v[m].clone() for k, v in self.online.state_dict().items()},
+            "online": self.member_weights(m),
             "target": {k: v[m].clone() for k, v in self.target.state_dict().items()},
             "adam_step": [float(adam.step_count)] * len(adam.params),
             "adam_exp_avg": [avg[m].clone() for avg in adam.exp_avg],

@@ -68,8 +68,8 @@ def hyperparameter_options(command: Any) -> Any:
         flag = "--" + f.name.replace("_", "-")
         if kind is bool:
             flag = f"{flag}/--no-{f.name.replace('_', '-')}"
-        help_text = docs.get(f.name, "") + f" [paper: {getattr(PRESETS['paper'], f.name)}, "
-        help_text += f"quick: {getattr(PRESETS['quick'], f.name)}]"
+        values = ", ".join(f"{name}: {getattr(preset, f.name)}" for name, preset in PRESETS.items())
+        help_text = f"{docs.get(f.name, '')} [{values}]"
         command = click.option(flag, f.name, type=kind, default=None, help=help_text)(command)
     return command
 
@@ -400,8 +400,25 @@ def _train_run(
         click.echo(f"  recordings: pursuit-bench view {out}")
 
 
+def pretrained_options(command: Any) -> Any:
+    """``--pretrained CONDITION`` and ``--out DIR``: the shipped agents instead of a RUN."""
+    command = click.option(
+        "--out",
+        type=click.Path(path_type=Path),
+        default=None,
+        help="With --pretrained: the folder for the results [runs/pretrained-CONDITION].",
+    )(command)
+    return click.option(
+        "--pretrained",
+        type=click.Choice(list(CONDITIONS)),
+        default=None,
+        help="Use the trained agents shipped with the package for this condition (REPRODUCTION.md) instead of a RUN.",
+    )(command)
+
+
 @main.command(name="eval")
-@click.argument("run", type=click.Path(path_type=Path))
+@click.argument("run", type=click.Path(path_type=Path), required=False)
+@pretrained_options
 @click.option("--episodes", type=click.IntRange(min=1), default=1000, show_default=True, help="Episodes per variant.")
 @click.option(
     "--seed",
@@ -422,9 +439,18 @@ def _train_run(
     "or episode counts sit side by side.",
 )
 def evaluate(
-    run: Path, episodes: int, seed: int, num_envs: int, no_record: bool, threads: int, tag: str | None
+    run: Path | None,
+    pretrained: str | None,
+    out: Path | None,
+    episodes: int,
+    seed: int,
+    num_envs: int,
+    no_record: bool,
+    threads: int,
+    tag: str | None,
 ) -> None:
-    """Evaluate a trained RUN by the paper's protocol; writes eval.json, eval.png and eval.rrd.
+    """Evaluate a trained RUN (or, with --pretrained, a shipped agent) by the paper's protocol;
+    writes eval.json, eval.png and eval.rrd.
 
     The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
     the previous ones as they were (exit 130 or 143)."""
@@ -433,23 +459,66 @@ def evaluate(
     from pursuit_bench import runs
 
     torch.set_num_threads(threads)
+    folder = _run_or_pretrained(run, pretrained, out)
+    settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     try:
-        paths = runs.eval_paths(run, tag)
-        runs.read_config(run)
-        with runs.locked(run):
-            _evaluate_run(run, paths, episodes=episodes, seed=seed, num_envs=num_envs, record=not no_record, tag=tag)
+        paths = runs.eval_paths(folder, tag)
+        if pretrained is not None:
+            folder.mkdir(parents=True, exist_ok=True)
+            with runs.locked(folder):
+                _evaluate_run(folder, paths, pretrained=pretrained, tag=tag, **settings)
+            return
+        runs.read_config(folder)
+        with runs.locked(folder):
+            _evaluate_run(folder, paths, pretrained=None, tag=tag, **settings)
     except ValueError as error:  # RunBusy too
         raise BadInput(str(error)) from None
 
 
-def _evaluate_run(
-    run: Path, paths: dict[str, Path], *, episodes: int, seed: int, num_envs: int, record: bool, tag: str | None
-) -> None:
-    from pursuit_bench.stack import evaluate_folder
+def _run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | None) -> Path:
+    """The folder a command works in: RUN, or --out (default runs/pretrained-CONDITION) with --pretrained."""
+    if (run is None) == (pretrained is None):
+        raise click.UsageError("give a RUN folder or --pretrained CONDITION (one of the two)")
+    if out is not None and pretrained is None:
+        raise click.UsageError("--out goes with --pretrained; a RUN's results go into the RUN")
+    if pretrained is not None:
+        return out if out is not None else Path("runs") / f"pretrained-{pretrained}"
+    assert run is not None
+    return run
 
+
+def _pretrained_agents(condition: str) -> tuple[TrainConfig, dict[str, Any], dict[str, Any]]:
+    """The shipped agents of ``condition``: (training config, agents, what eval.json says of them)."""
+    from pursuit_bench import pretrained
+
+    config = pretrained.training_config(condition)
+    header = next(iter(pretrained.info(condition).values()))
+    shown = {k: v for k, v in header.items() if k not in ("training", "agent", "kind", "format")}
+    about = {"pretrained": shown, "trained_episodes": int(header["trained_episodes"])}
+    return config, pretrained.load(condition), about
+
+
+def _evaluate_run(
+    run: Path,
+    paths: dict[str, Path],
+    *,
+    pretrained: str | None,
+    episodes: int,
+    seed: int,
+    num_envs: int,
+    record: bool,
+    tag: str | None,
+) -> None:
+    from pursuit_bench.stack import evaluate_folder, evaluate_into
+
+    settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": record}
     try:
         with SignalCatcher(raise_at_once=True).active():
-            result = evaluate_folder(run, episodes=episodes, seed=seed, num_envs=num_envs, record=record, tag=tag)
+            if pretrained is None:
+                result = evaluate_folder(run, tag=tag, **settings)
+            else:
+                config, agents, about = _pretrained_agents(pretrained)
+                result = evaluate_into(paths, config, agents, {**about, "tag": tag}, **settings)
     except Stopped as stopped:
         click.echo(f"\n{stopped}: evaluation stopped; {run} keeps its previous results", err=True)
         sys.exit(stopped.exit_code)
@@ -646,44 +715,52 @@ def report(sweep_folder: Path) -> None:
 
 
 @main.command()
-@click.argument("folder", metavar="RUN", type=click.Path(path_type=Path))
+@click.argument("folder", metavar="RUN", type=click.Path(path_type=Path), required=False)
+@pretrained_options
 @click.option("--episodes", type=click.IntRange(min=1), default=200, show_default=True, help="Episodes to play.")
 @click.option(
     "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seeds the episodes and the t-SNE."
 )
-def analyze(folder: Path, episodes: int, seed: int) -> None:
+def analyze(folder: Path | None, pretrained: str | None, out: Path | None, episodes: int, seed: int) -> None:
     """What the trained predators' value streams represent and when they chase (Fig. 3).
 
-    On a run folder: fig3.png, modes.png, analysis.json and analysis.rrd. On a sweep folder:
-    P(chase | distance) and the chase-onset distance for low against high chase cost, per number
-    of predators, over seeds: modes.png and analysis.json in the sweep folder."""
+    On a run folder (or a shipped agent, --pretrained): fig3.png, modes.png, analysis.json and
+    analysis.rrd. On a sweep folder: P(chase | distance) and the chase-onset distance for low
+    against high chase cost, per number of predators, over seeds: modes.png and analysis.json
+    in the sweep folder."""
     import torch
 
     from pursuit_bench import runs
 
     torch.set_num_threads(1)
-    if (folder / "sweep.json").is_file():
-        _analyze_sweep(folder, episodes, seed)
+    where = _run_or_pretrained(folder, pretrained, out)
+    if pretrained is None and (where / "sweep.json").is_file():
+        _analyze_sweep(where, episodes, seed)
         return
     try:
-        runs.read_config(folder)
-        with runs.locked(folder):
-            _analyze_run(folder, episodes, seed)
+        if pretrained is not None:
+            where.mkdir(parents=True, exist_ok=True)
+            with runs.locked(where):
+                config, agents, _ = _pretrained_agents(pretrained)
+                _analyze_run(where, config, agents, episodes, seed)
+            return
+        runs.read_config(where)
+        with runs.locked(where):
+            config, _ = runs.read_config(where)
+            _analyze_run(where, config, runs.load_agents(where), episodes, seed)
     except ValueError as error:  # RunBusy, not a run folder, not trained
         raise BadInput(str(error)) from None
 
 
-def _analyze_run(folder: Path, episodes: int, seed: int) -> dict[str, Any]:
+def _analyze_run(folder: Path, config: TrainConfig, agents: dict[str, Any], episodes: int, seed: int) -> None:
     import numpy as np
 
-    from pursuit_bench import analysis, runs
+    from pursuit_bench import analysis
     from pursuit_bench.files import atomic_write_bytes, atomic_write_text
     from pursuit_bench.plots import fig3_png, modes_png
     from pursuit_bench.recording import record_embedding
 
-    config, _ = runs.read_config(folder)
-    agents = runs.load_agents(folder)
-    states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed)  # type: ignore[arg-type]
+    states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed)
     if not states:
         raise ValueError(f"{folder}: its predators are {config.predator}, not hierarchical: nothing to analyse")
     result, embeddings = analysis.analyse(states, seed)
@@ -723,7 +800,6 @@ def _analyze_run(folder: Path, episodes: int, seed: int) -> dict[str, Any]:
             f"{r['organisation']['value']:.2f}; P(chase) {r['p_chase']:.2f}; chase bouts start at {median} (median)"
         )
     click.echo(f"written: fig3.png, modes.png, analysis.json, analysis.rrd in {folder}")
-    return payload
 
 
 def _analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> None:

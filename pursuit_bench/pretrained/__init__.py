@@ -1,0 +1,147 @@
+"""Trained agents shipped with the package: for each of the paper's ten conditions, the agents of
+one seed of the reproduction sweep (REPRODUCTION.md), the median seed by the predators' mean
+return, not the best.
+
+Each agent is one file, ``pretrained/<condition>/<agent name>.safetensors``: the online
+network's weights and a text header saying how it was trained (sweep command, preset, seed,
+episodes, the full training configuration, project version). safetensors holds tensors and
+strings only, so reading a file never runs code from it.
+
+>>> from pursuit_bench import pretrained
+>>> agents = pretrained.load("2p-high-individual")   # {"predator_0": …, "predator_1": …, "prey_0": …}
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import torch
+from safetensors import SafetensorError, safe_open
+from safetensors.torch import save
+
+from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
+from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.files import atomic_write_bytes
+from pursuit_bench.task import obs_size
+from pursuit_bench.train import TrainConfig, build_agents
+
+FOLDER = Path(__file__).parent
+"""Where the shipped agents lie (package data)."""
+FORMAT = "pursuit-bench-pretrained-1"
+SUFFIX = ".safetensors"
+
+
+def available() -> list[str]:
+    """The conditions whose agents are shipped, in the paper's order."""
+    return [c for c in CONDITIONS if any((FOLDER / c).glob(f"*{SUFFIX}"))]
+
+
+def _condition_folder(condition: str, folder: Path | None) -> Path:
+    shipped = available() if folder is None else [c for c in CONDITIONS if (folder / c).is_dir()]
+    if condition not in shipped:
+        raise ValueError(f"no trained agents for condition {condition!r}: expected one of {', '.join(shipped)}")
+    return (folder or FOLDER) / condition
+
+
+def read(path: Path) -> tuple[dict[str, torch.Tensor], dict[str, str]]:
+    """One agent's file: (weights by parameter name, header). ``ValueError`` if it is not one."""
+    try:
+        with safe_open(str(path), framework="pt") as file:
+            header = dict(file.metadata() or {})
+            weights = {name: file.get_tensor(name) for name in file.keys()}
+    except (SafetensorError, OSError) as error:
+        raise ValueError(f"{path}: not a readable safetensors file ({error})") from None
+    if header.get("format") != FORMAT:
+        raise ValueError(f"{path}: not a pursuit-bench trained agent (format {FORMAT!r} expected)")
+    return weights, header
+
+
+def info(condition: str, *, folder: Path | None = None) -> dict[str, Any]:
+    """How the shipped agents of ``condition`` were trained: the header of each agent's file,
+    by agent name, with ``training`` parsed back into a dict."""
+    found = {}
+    for path in sorted(_condition_folder(condition, folder).glob(f"*{SUFFIX}")):
+        header: dict[str, Any] = dict(read(path)[1])
+        header["training"] = json.loads(header["training"])
+        found[path.name.removesuffix(SUFFIX)] = header
+    return found
+
+
+def load(condition: str, *, folder: Path | None = None) -> dict[str, LearningAgent | ScriptedAgent]:
+    """The shipped agents of ``condition`` by name (``predator_0`` …, ``prey_0``), ready for
+    ``act(observation)`` (greedy) and :func:`~pursuit_bench.evaluate.evaluate_agents`.
+    ``folder``: read from there instead of the package (for agents you exported yourself)."""
+    config = training_config(condition, folder=folder)
+    where = _condition_folder(condition, folder)
+    _, (agents,) = build_agents([config], [obs_size(len(CONDITIONS[condition].agent_names))])
+    for name, agent in agents.items():
+        if not isinstance(agent, LearningAgent):
+            continue
+        path = where / f"{name}{SUFFIX}"
+        if not path.exists():
+            raise ValueError(f"{where}: no file for agent {name!r}")
+        weights, header = read(path)
+        if (header.get("condition"), header.get("agent"), header.get("kind")) != (condition, name, agent.kind):
+            raise ValueError(
+                f"{path}: holds the {header.get('kind')} agent {header.get('agent')!r} of "
+                f"{header.get('condition')!r}, not the {agent.kind} agent {name!r} of {condition!r}"
+            )
+        try:
+            agent.learner.load_member_weights(agent.member, weights)
+        except ValueError as error:
+            raise ValueError(f"{path}: {error}") from None
+    return agents
+
+
+def training_config(condition: str, *, folder: Path | None = None) -> TrainConfig:
+    """The training configuration the shipped agents of ``condition`` came from."""
+    headers = info(condition, folder=folder)
+    return TrainConfig.from_dict(next(iter(headers.values()))["training"])
+
+
+def export(
+    agents: dict[str, LearningAgent | ScriptedAgent],
+    config: TrainConfig,
+    dest: Path,
+    *,
+    trained_episodes: int,
+    provenance: dict[str, str],
+) -> list[Path]:
+    """Write each learning agent's weights into ``dest/<condition>/<name>.safetensors``, its
+    header saying how it was trained: ``config`` (as JSON), the episodes it trained, the project
+    version, and ``provenance`` (e.g. the sweep command, preset, how the seed was chosen)."""
+    from pursuit_bench import __version__
+
+    where = dest / config.condition
+    where.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, agent in agents.items():
+        if not isinstance(agent, LearningAgent):
+            continue
+        header = {
+            **provenance,
+            "format": FORMAT,
+            "condition": config.condition,
+            "agent": name,
+            "kind": agent.kind,
+            "seed": str(config.seed),
+            "trained_episodes": str(trained_episodes),
+            "training": json.dumps(config.to_dict(), sort_keys=True),
+            "version": __version__,
+        }
+        weights = {k: v.contiguous() for k, v in agent.learner.member_weights(agent.member).items()}
+        path = where / f"{name}{SUFFIX}"
+        atomic_write_bytes(path, save(weights, metadata=header))
+        written.append(path)
+    return written
+
+
+def median_seed(scores: dict[Path, float]) -> Path:
+    """Of runs scored by their predators' mean return, the median one (the lower of the two
+    middle ones for an even count; ties broken by the folder's name)."""
+    if not scores:
+        raise ValueError("no runs to choose from: expected at least one evaluated run")
+    ranked = sorted(scores, key=lambda path: (scores[path], path.name))
+    return ranked[(len(ranked) - 1) // 2]
