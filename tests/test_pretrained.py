@@ -103,5 +103,7 @@ def test_eval_needs_a_run_or_pretrained_not_both(trained: Path, tmp_path: Path) 
     assert code == 2 and "give a RUN folder or --pretrained CONDITION" in output
     code, output = run_cli("eval", str(trained), "--out", str(tmp_path))
     assert code == 2 and "--out goes with --pretrained" in output
+    code, output = run_cli("eval", "--pretrained", "1p-low", "--out", str(trained))
+    assert code == 2 and "holds a training run" in output
     code, output = run_cli("eval", "--pretrained", "9p-high")
     assert code == 2 and "'9p-high' is not one of" in output

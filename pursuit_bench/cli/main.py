@@ -482,7 +482,10 @@ def _run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | Non
     if out is not None and pretrained is None:
         raise click.UsageError("--out goes with --pretrained; a RUN's results go into the RUN")
     if pretrained is not None:
-        return out if out is not None else Path("runs") / f"pretrained-{pretrained}"
+        folder = out if out is not None else Path("runs") / f"pretrained-{pretrained}"
+        if (folder / "config.json").exists():
+            raise click.UsageError(f"--out {folder} holds a training run, whose results are its own: choose another")
+        return folder
     assert run is not None
     return run
 
