@@ -853,7 +853,7 @@ def _analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> None:
             "ci": [[None if c is None else c[0] for c in cis], [None if c is None else c[1] for c in cis]],
         }
     atomic_write_text(sweep_folder / "analysis.json", json.dumps(result, indent=2) + "\n")
-    title = "P(chase) by distance, low against high chase cost (mean over seeds, 95 % interval)"
+    title = "P(chase) by distance, low vs high chase cost (mean over seeds, 95 % CI)"
     atomic_write_bytes(sweep_folder / "modes.png", modes_png(curves, title))
     for label, r in result.items():
         median = f"{r['chase_onset_median']:.2f}" if r["chase_onset_median"] is not None else "–"
