@@ -463,14 +463,12 @@ def evaluate(
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     try:
         paths = runs.eval_paths(folder, tag)
-        if pretrained is not None:
+        if pretrained is None:
+            runs.read_config(folder)  # a run folder, before a lock file is made in it
+        else:
             folder.mkdir(parents=True, exist_ok=True)
-            with runs.locked(folder):
-                _evaluate_run(folder, paths, pretrained=pretrained, tag=tag, **settings)
-            return
-        runs.read_config(folder)
         with runs.locked(folder):
-            _evaluate_run(folder, paths, pretrained=None, tag=tag, **settings)
+            _evaluate_run(folder, paths, pretrained, tag, settings)
     except ValueError as error:  # RunBusy too
         raise BadInput(str(error)) from None
 
@@ -502,19 +500,10 @@ def _pretrained_agents(condition: str) -> tuple[TrainConfig, dict[str, Any], dic
 
 
 def _evaluate_run(
-    run: Path,
-    paths: dict[str, Path],
-    *,
-    pretrained: str | None,
-    episodes: int,
-    seed: int,
-    num_envs: int,
-    record: bool,
-    tag: str | None,
+    run: Path, paths: dict[str, Path], pretrained: str | None, tag: str | None, settings: dict[str, Any]
 ) -> None:
     from pursuit_bench.stack import evaluate_folder, evaluate_into
 
-    settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": record}
     try:
         with SignalCatcher(raise_at_once=True).active():
             if pretrained is None:
@@ -532,7 +521,7 @@ def _evaluate_run(
             f"always-chase {panel['always_chase']:+.3f}  always-stalk {panel['always_stalk']:+.3f}"
         )
     click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")
-    if record:
+    if settings["record"]:
         click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")
 
 
