@@ -10,6 +10,7 @@ commands that use them, so that ``--help`` and errors come at once.
 from __future__ import annotations
 
 import ast
+import contextlib
 import dataclasses
 import inspect
 import itertools
@@ -20,6 +21,7 @@ import subprocess
 import sys
 import textwrap
 import uuid
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -463,11 +465,7 @@ def evaluate(
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     try:
         paths = runs.eval_paths(folder, tag)
-        if pretrained is None:
-            runs.read_config(folder)  # a run folder, before a lock file is made in it
-        else:
-            folder.mkdir(parents=True, exist_ok=True)
-        with runs.locked(folder):
+        with _locked(folder, pretrained):
             _evaluate_run(folder, paths, pretrained, tag, settings)
     except ValueError as error:  # RunBusy too
         raise BadInput(str(error)) from None
@@ -488,15 +486,29 @@ def _run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | Non
     return run
 
 
+@contextlib.contextmanager
+def _locked(folder: Path, pretrained: str | None) -> Iterator[None]:
+    """Hold ``folder``'s lock: a trained RUN (checked before a lock file is made in it), or the
+    results folder of --pretrained (made if missing)."""
+    from pursuit_bench import runs
+
+    if pretrained is None:
+        runs.read_config(folder)
+    else:
+        folder.mkdir(parents=True, exist_ok=True)
+    with runs.locked(folder):
+        yield
+
+
 def _pretrained_agents(condition: str) -> tuple[TrainConfig, dict[str, Any], dict[str, Any]]:
     """The shipped agents of ``condition``: (training config, agents, what eval.json says of them)."""
     from pursuit_bench import pretrained
+    from pursuit_bench.train import TrainConfig
 
-    config = pretrained.training_config(condition)
     header = next(iter(pretrained.info(condition).values()))
     shown = {k: v for k, v in header.items() if k not in ("training", "agent", "kind", "format")}
     about = {"pretrained": shown, "trained_episodes": int(header["trained_episodes"])}
-    return config, pretrained.load(condition), about
+    return TrainConfig.from_dict(header["training"]), pretrained.load(condition), about
 
 
 def _evaluate_run(
@@ -730,16 +742,12 @@ def analyze(folder: Path | None, pretrained: str | None, out: Path | None, episo
         _analyze_sweep(where, episodes, seed)
         return
     try:
-        if pretrained is not None:
-            where.mkdir(parents=True, exist_ok=True)
-            with runs.locked(where):
+        with _locked(where, pretrained):
+            if pretrained is None:
+                config, agents = runs.read_config(where)[0], runs.load_agents(where)
+            else:
                 config, agents, _ = _pretrained_agents(pretrained)
-                _analyze_run(where, config, agents, episodes, seed)
-            return
-        runs.read_config(where)
-        with runs.locked(where):
-            config, _ = runs.read_config(where)
-            _analyze_run(where, config, runs.load_agents(where), episodes, seed)
+            _analyze_run(where, config, agents, episodes, seed)
     except ValueError as error:  # RunBusy, not a run folder, not trained
         raise BadInput(str(error)) from None
 

@@ -73,16 +73,16 @@ def load(condition: str, *, folder: Path | None = None) -> dict[str, LearningAge
     """The shipped agents of ``condition`` by name (``predator_0`` …, ``prey_0``), ready for
     ``act(observation)`` (greedy) and :func:`~pursuit_bench.evaluate.evaluate_agents`.
     ``folder``: read from there instead of the package (for agents you exported yourself)."""
-    config = training_config(condition, folder=folder)
     where = _condition_folder(condition, folder)
+    files = {path.name.removesuffix(SUFFIX): (path, *read(path)) for path in sorted(where.glob(f"*{SUFFIX}"))}
+    config = TrainConfig.from_dict(json.loads(next(iter(files.values()))[2]["training"]))
     _, (agents,) = build_agents([config], [obs_size(len(CONDITIONS[condition].agent_names))])
     for name, agent in agents.items():
         if not isinstance(agent, LearningAgent):
             continue
-        path = where / f"{name}{SUFFIX}"
-        if not path.exists():
+        if name not in files:
             raise ValueError(f"{where}: no file for agent {name!r}")
-        weights, header = read(path)
+        path, weights, header = files[name]
         if (header.get("condition"), header.get("agent"), header.get("kind")) != (condition, name, agent.kind):
             raise ValueError(
                 f"{path}: holds the {header.get('kind')} agent {header.get('agent')!r} of "
