@@ -18,10 +18,14 @@ import statistics
 import time
 
 import gymnasium
+import numpy as np
 import torch
 
 import pursuit_bench  # noqa: F401  (registers the Gymnasium env)
 from pursuit_bench.agents.config import QUICK
+from pursuit_bench.agents.dqn import WALL_FEATURES, DQNLearner
+from pursuit_bench.agents.network import HEAD, TRUNK
+from pursuit_bench.task import obs_size
 from pursuit_bench.train import TrainConfig, Trainer
 
 AGENT = QUICK.replace(learning_starts=500)
@@ -45,6 +49,47 @@ def trainer_rates(configs: list[TrainConfig], steps: int, repeats: int) -> tuple
     transitions = statistics.median(r[0] for r in rates)
     updates = statistics.median(r[1] for r in rates)
     return transitions, updates, 1.0 / updates
+
+
+def member_update_flops(n_obs: int, n_actions: int, batch: int) -> float:
+    """Floating-point operations of one member-update: the dueling network's matrix products
+    (2 per multiply-add) for the online pass on s, the online and target passes on s' and the
+    backward pass (twice the forward's products), the loss and Adam ignored."""
+    trunk = n_obs * TRUNK[0] + TRUNK[0] * TRUNK[1]
+    heads = TRUNK[1] * HEAD + HEAD + TRUNK[1] * HEAD + HEAD * n_actions
+    forward = 2.0 * batch * (trunk + heads)
+    return 3 * forward + 2 * forward
+
+
+def matmul_rate(repeats: int) -> float:
+    """FLOP/s of this CPU on one thread, from 256×256 matrix products (median of repeats)."""
+    a, b = torch.randn(256, 256), torch.randn(256, 256)
+    rates = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(200):
+            torch.mm(a, b)
+        rates.append(200 * 2 * 256**3 / (time.perf_counter() - start))
+    return statistics.median(rates)
+
+
+def member_update_seconds(members: int, n_obs: int, repeats: int) -> float:
+    """Median seconds per member-update of a learner with ``members`` members (prey-sized
+    network, batch of AGENT), its replay filled."""
+    learner = DQNLearner(n_obs, 12, AGENT, members=members, seed=0)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        obs = rng.normal(size=(members, 100, n_obs)).astype(np.float32)
+        learner.store(
+            obs, rng.integers(0, 12, (members, 100)), rng.normal(size=(members, 100)), obs, np.zeros((members, 100))
+        )
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(50):
+            learner.update()
+        times.append((time.perf_counter() - start) / (50 * members))
+    return statistics.median(times)
 
 
 def sb3_rates(steps: int, repeats: int) -> tuple[float, float] | None:
@@ -87,7 +132,18 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     torch.set_num_threads(1)
-    print(f"{'':36s} {'transitions/s':>14s} {'member-updates/s':>17s} {'ms/member-update':>17s}")
+    rate = matmul_rate(args.repeats)
+    n_obs = obs_size(2)
+    bound = member_update_flops(n_obs + WALL_FEATURES, 12, AGENT.batch_size) / rate
+    print(
+        f"matrix products: {rate / 1e9:.1f} GFLOP/s on one thread; one member-update (batch "
+        f"{AGENT.batch_size}) is {member_update_flops(n_obs, 12, AGENT.batch_size) / 1e6:.2f} MFLOP: "
+        f"bound {bound * 1e3:.3f} ms"
+    )
+    for members in (1, 24):
+        seconds = member_update_seconds(members, n_obs, args.repeats)
+        print(f"member-update at {members:2d} members: {seconds * 1e3:.3f} ms = {seconds / bound:.1f}x the bound")
+    print(f"{'':36s} {'transitions/s':>14s} {'member-updates/s':>17s} {'ms/member-update':>17s} {'x bound':>8s}")
     for condition in ("1p-high", "3p-high-shared"):
         configs = [
             TrainConfig(condition=condition, agent=AGENT, num_envs=args.num_envs, seed=s, episodes=10**9)
@@ -99,13 +155,14 @@ def main() -> None:
             (f"{condition}, one run at a time", alone),
             (f"{condition}, {args.runs} stacked", stacked),
         ):
-            print(f"{label:36s} {t:14,.0f} {u:17,.0f} {s * 1e3:17.3f}")
+            print(f"{label:36s} {t:14,.0f} {u:17,.0f} {s * 1e3:17.3f} {s / bound:8.1f}")
         print(f"  stacked / one after another: {stacked[0] / alone[0]:.2f}x transitions/s")
     sb3 = sb3_rates(args.steps * 4, args.repeats)
     if sb3 is None:
         print("SB3 DQN: not installed (pip install stable-baselines3)")
         return
-    print(f"{'SB3 DQN, single-agent view':36s} {sb3[0]:14,.0f} {sb3[1]:17,.0f} {1e3 / sb3[1]:17.3f}")
+    label = "SB3 DQN, single-agent view"
+    print(f"{label:36s} {sb3[0]:14,.0f} {sb3[1]:17,.0f} {1e3 / sb3[1]:17.3f} {1 / sb3[1] / bound:8.1f}")
 
 
 if __name__ == "__main__":

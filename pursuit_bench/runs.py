@@ -101,15 +101,21 @@ def read_config(folder: Path) -> tuple[TrainConfig, dict[str, Any]]:
         raise ValueError(f"{path}: not a pursuit-bench run configuration ({error})") from None
 
 
-def save_checkpoint(folder: Path, state: dict[str, Any]) -> None:
-    checkpoint.save(folder / CHECKPOINT, {"kind": "run", **state})
+def milestone_checkpoint(episodes: int) -> str:
+    """The name of the checkpoint a run keeps at ``episodes`` (a sweep's ``keep_checkpoints``)."""
+    return f"checkpoint-ep{episodes}.pt"
 
 
-def load_checkpoint(folder: Path) -> dict[str, Any]:
-    """The run's latest checkpoint, or ValueError (missing, truncated, corrupted, foreign)."""
-    path = folder / CHECKPOINT
+def save_checkpoint(folder: Path, state: dict[str, Any], name: str = CHECKPOINT) -> None:
+    checkpoint.save(folder / name, {"kind": "run", **state})
+
+
+def load_checkpoint(folder: Path, name: str = CHECKPOINT) -> dict[str, Any]:
+    """The run's latest checkpoint (or the one called ``name``), or ValueError (missing,
+    truncated, corrupted, foreign)."""
+    path = folder / name
     if not path.is_file():
-        raise ValueError(f"{folder}: no checkpoint yet ({CHECKPOINT} is missing)")
+        raise ValueError(f"{folder}: no checkpoint yet ({name} is missing)")
     state = checkpoint.read(path)
     if state.get("kind") != "run" or "agents" not in state:
         raise ValueError(f"{path}: not a training-run checkpoint")
@@ -167,6 +173,6 @@ def clear(folder: Path) -> None:
     """Remove a run's own files (and only those) so that a fresh run can start there."""
     for name in RUN_FILES:
         (folder / name).unlink(missing_ok=True)
-    for pattern in ("train*.rrd", "eval.*", "eval-*.*", ".*.tmp"):
+    for pattern in ("train*.rrd", "eval.*", "eval-*.*", ".*.tmp", "checkpoint-ep*.pt"):
         for path in folder.glob(pattern):
             path.unlink()

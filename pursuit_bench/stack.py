@@ -75,9 +75,13 @@ def train_stack(
         runs.keep_metrics(r.folder, r.episodes_done)
     metrics = [(r.folder / runs.METRICS).open("a") for r in todo]
 
+    keep = [{int(n) for n in r.settings.get("keep_checkpoints", ())} for r in todo]
+
     def writer(k: int) -> Callable[[EpisodeRecord], None]:
         def write(record: EpisodeRecord) -> None:
             metrics[k].write(json.dumps(record.as_row()) + "\n")
+            if record.episode in keep[k]:  # a milestone: its state as the episode ends, kept for later evaluation
+                runs.save_checkpoint(todo[k].folder, trainer.state_dict(k), runs.milestone_checkpoint(record.episode))
             if on_episode is not None:
                 on_episode(places[k], record)
 
@@ -138,12 +142,14 @@ def evaluate_folder(
     num_envs: int = 64,
     record: bool = True,
     tag: str | None = None,
+    checkpoint: str = runs.CHECKPOINT,
 ) -> dict[str, Any]:
     """Evaluate a trained run folder (its lock held by the caller) by the paper's protocol and
     write ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*``) into it: see
-    :func:`evaluate_into`. Returns the result."""
+    :func:`evaluate_into`. ``checkpoint``: which of the folder's checkpoints (the latest by
+    default, or a milestone's). Returns the result."""
     config, _ = runs.read_config(folder)
-    state = runs.load_checkpoint(folder)
+    state = runs.load_checkpoint(folder, checkpoint)
     agents = runs.load_agents(folder, state)
     return evaluate_into(
         runs.eval_paths(folder, tag),

@@ -27,7 +27,7 @@ from typing import Any
 
 from pursuit_bench import runs
 from pursuit_bench.agents.config import QUICK, AgentConfig
-from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.conditions import CHASE_COSTS, CONDITIONS
 from pursuit_bench.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.train import TrainConfig
 
@@ -63,6 +63,9 @@ class SweepPlan:
     """Episodes between checkpoints (a stack's unfinished runs checkpoint together)."""
     preset: str = "quick"
     """Name of the preset ``agent`` started from (for the record)."""
+    keep_checkpoints: tuple[int, ...] = ()
+    """Episode counts at which every run keeps its checkpoint (``checkpoint-epN.pt``), each
+    evaluated like the final one into ``eval-epN.json``: learning against budget."""
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.conditions if c not in CONDITIONS]
@@ -73,6 +76,12 @@ class SweepPlan:
         kinds = ("hierarchical", "flat", "always_chase", "always_stalk")
         if not self.predators or any(p not in kinds for p in self.predators):
             raise ValueError(f"predators={list(self.predators)!r}: expected some of {', '.join(kinds)}")
+        if any(
+            isinstance(n, bool) or not isinstance(n, int) or not 1 <= n < self.episodes for n in self.keep_checkpoints
+        ):
+            raise ValueError(
+                f"keep_checkpoints={list(self.keep_checkpoints)!r}: expected episode counts in [1, {self.episodes})"
+            )
 
     def runs(self) -> dict[str, TrainConfig]:
         """Every run by its folder name, ``<condition>-<predator>-seed<S>``."""
@@ -98,20 +107,57 @@ class SweepPlan:
     def from_dict(cls, data: dict[str, Any]) -> SweepPlan:
         fields = {**data, "agent": AgentConfig().replace(**data["agent"])}
         fields.update(conditions=tuple(data["conditions"]), predators=tuple(data["predators"]))
+        fields["keep_checkpoints"] = tuple(data.get("keep_checkpoints", ()))
         return cls(**fields)
 
 
+#: Mean episode length (env steps) by number of predators and chase cost, with the predators
+#: and the prey trained: the reproduction sweep's evaluations (REPRODUCTION.md, the prey table).
+EPISODE_STEPS = {(1, "low"): 15, (1, "high"): 144, (2, "low"): 10, (2, "high"): 66, (3, "low"): 8, (3, "high"): 28}
+#: How much longer the flat ablation's episodes run (REPRODUCTION.md: 1.5–3 times the transitions).
+FLAT_FACTOR = 2.0
+
+
+def expected_transitions(config: TrainConfig) -> float:
+    """What a run is expected to cost: its arena-steps (transitions), from its condition and
+    predator kind (``EPISODE_STEPS``). Every learner acts and learns on each transition, so a
+    stack's time is about its runs' transitions times their learners."""
+    condition = CONDITIONS[config.condition]
+    cost = "high" if condition.chase_cost >= CHASE_COSTS["high"] else "low"
+    steps = EPISODE_STEPS[(condition.n_predators, cost)] * (FLAT_FACTOR if config.predator == "flat" else 1.0)
+    return config.episodes * steps
+
+
+def expected_cost(config: TrainConfig) -> float:
+    """Transitions times learning agents: the unit of work the sweep plans and counts by."""
+    return expected_transitions(config) * (CONDITIONS[config.condition].n_predators + 1)
+
+
 def stacks(plan: SweepPlan, names: list[str], workers: int, max_runs: int = 16) -> list[list[str]]:
-    """Runs grouped into stacks: runs of one stack share network shapes (predator kind and
-    number of predators); stacks hold at most ``max_runs`` and, where the runs allow, there are
-    at least ``workers`` of them."""
+    """Runs grouped into stacks, longest first: runs of one stack share network shapes
+    (predator kind and number of predators); stacks hold at most ``max_runs``. Planned by
+    expected cost (:func:`expected_cost`), not by count: a group of runs is cut into stacks
+    of at most half a worker's share of the total each, its runs dealt longest first to the
+    stack with the least cost so far, so that workers taking stacks longest first finish
+    together."""
     all_runs = plan.runs()
     groups: dict[tuple[str, int], list[str]] = {}
     for name in names:
         config = all_runs[name]
         groups.setdefault((config.predator, CONDITIONS[config.condition].n_predators), []).append(name)
-    size = max(1, min(max_runs, math.ceil(len(names) / max(workers, 1))))
-    return [members[i : i + size] for members in groups.values() for i in range(0, len(members), size)]
+    cost = {name: expected_cost(all_runs[name]) for name in names}
+    share = sum(cost.values()) / (2 * max(workers, 1))
+    planned: list[list[str]] = []
+    for members in groups.values():
+        total = sum(cost[n] for n in members)
+        count = max(math.ceil(total / share) if share > 0 else 1, math.ceil(len(members) / max_runs))
+        count = min(count, len(members))
+        bins: list[list[str]] = [[] for _ in range(count)]
+        for name in sorted(members, key=lambda n: (-cost[n], n)):
+            open_bins = [b for b in bins if len(b) < max_runs]
+            min(open_bins, key=lambda b: sum(cost[n] for n in b)).append(name)
+        planned += [sorted(b, key=members.index) for b in bins if b]
+    return sorted(planned, key=lambda b: -sum(cost[n] for n in b))
 
 
 def open_sweep(out: Path, plan: SweepPlan) -> None:
@@ -133,13 +179,20 @@ def open_sweep(out: Path, plan: SweepPlan) -> None:
     atomic_write_text(path, json.dumps(payload, indent=2) + "\n")
 
 
-def run_status(folder: Path, config: TrainConfig) -> tuple[int, bool]:
-    """(episodes trained, evaluated) of a sweep's run folder, from its checkpoint and eval.json."""
+def milestone_tag(episodes: int) -> str:
+    """The evaluation tag of a kept checkpoint: ``eval-ep1500.json`` …"""
+    return f"ep{episodes}"
+
+
+def run_status(folder: Path, config: TrainConfig, keep: tuple[int, ...] = ()) -> tuple[int, bool]:
+    """(episodes trained, evaluated) of a sweep's run folder, from its checkpoint, eval.json
+    and the evaluations of its kept checkpoints (``keep``)."""
     try:
         done = int(runs.load_checkpoint(folder)["episodes_done"])
     except ValueError:
         return 0, False
-    return done, done >= config.episodes and (folder / "eval.json").exists()
+    evaluations = ["eval.json", *(runs.eval_paths(folder, milestone_tag(n))["json"].name for n in keep)]
+    return done, done >= config.episodes and all((folder / name).exists() for name in evaluations)
 
 
 def _prepare(folder: Path, name: str, config: TrainConfig, plan: SweepPlan) -> dict[str, Any] | None:
@@ -156,6 +209,7 @@ def _prepare(folder: Path, name: str, config: TrainConfig, plan: SweepPlan) -> d
         "record_every": plan.record_every,
         "checkpoint_every": plan.checkpoint_every,
         "recording_id": uuid.uuid4().hex,
+        "keep_checkpoints": list(plan.keep_checkpoints),
     }
     runs.write_config(folder, config, settings)
     return None
@@ -204,9 +258,22 @@ def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -
         for name in names:
             if should_stop():
                 break
-            done, evaluated = run_status(folders[name], configs[name])
+            done, evaluated = run_status(folders[name], configs[name], plan.keep_checkpoints)
             if done >= configs[name].episodes and not evaluated:
-                evaluate_folder(folders[name], episodes=plan.eval_episodes, seed=EVAL_SEED, record=False)
+                if not (folders[name] / "eval.json").exists():
+                    evaluate_folder(folders[name], episodes=plan.eval_episodes, seed=EVAL_SEED, record=False)
+                for n in plan.keep_checkpoints:
+                    tag = milestone_tag(n)
+                    if not runs.eval_paths(folders[name], tag)["json"].exists():
+                        checkpoint = runs.milestone_checkpoint(n)
+                        evaluate_folder(
+                            folders[name],
+                            episodes=plan.eval_episodes,
+                            seed=EVAL_SEED,
+                            record=False,
+                            tag=tag,
+                            checkpoint=checkpoint,
+                        )
             messages.put(("done", name, None))
 
 
@@ -227,7 +294,11 @@ def run_sweep(
     ``on_message`` hears the workers' messages; when ``should_stop()`` turns true the workers
     are stopped (local ones checkpoint first). Returns whether every run is done."""
     configs = plan.runs()
-    todo = [name for name, config in configs.items() if not run_status(out / "runs" / name, config)[1]]
+    todo = [
+        name
+        for name, config in configs.items()
+        if not run_status(out / "runs" / name, config, plan.keep_checkpoints)[1]
+    ]
     tasks = stacks(plan, todo, workers)
     if executor == "ray":
         _run_on_ray(
@@ -237,7 +308,7 @@ def run_sweep(
         _run_locally(out, tasks, workers=workers, record=record, on_message=on_message, should_stop=should_stop)
     else:
         raise ValueError(f"executor={executor!r}: expected 'local' or 'ray'")
-    return all(run_status(out / "runs" / name, config)[1] for name, config in configs.items())
+    return all(run_status(out / "runs" / name, config, plan.keep_checkpoints)[1] for name, config in configs.items())
 
 
 def _run_locally(

@@ -10,8 +10,9 @@ run's arenas from its seed, so what a run learns does not depend on its companio
 
 The loop, top to bottom (:meth:`Trainer.step`): act (one forward pass per group of learners) →
 step every run's env → store each agent's transition → update → count finished episodes.
-A run that reaches its episode budget is finished: its episodes are no longer counted or
-reported while its companions go on (its arenas keep stepping, its outputs unused).
+A run that reaches its episode budget is finished: its arenas stop, and its members leave their
+stacked learners (each keeps a learner of its own with its final state), so a stack costs what
+its unfinished runs cost.
 The CLI parses options into a :class:`TrainConfig` and calls :class:`Trainer`.
 """
 
@@ -376,8 +377,12 @@ class Trainer:
             self.step()
 
     def step(self) -> None:
-        """One step of every arena of every run: act, step, store, update, count episodes."""
-        actions = [np.zeros((run.config.num_envs, len(run.names), 2), dtype=np.int64) for run in self.runs]
+        """One step of every arena of every unfinished run: act, step, store, update, count
+        episodes; then the runs this step finished leave their learners."""
+        active = [r for r, run in enumerate(self.runs) if not run.finished]
+        actions = {
+            r: np.zeros((self.runs[r].config.num_envs, len(self.runs[r].names), 2), dtype=np.int64) for r in active
+        }
         decided = []
         for group in self.groups:  # one forward pass per group, all its runs at once
             obs = np.stack([self.runs[r].obs[:, i] for r, i in zip(group.runs, group.indices, strict=True)])
@@ -388,13 +393,14 @@ class Trainer:
                 put_actions(actions[r], i, agent.to_env(chosen[m], obs[m]))
                 if agent.kind == "hierarchical":
                     self.runs[r].q_values[:, i], self.runs[r].values[:, i] = q[m], v[m]
-        for run, run_actions in zip(self.runs, actions, strict=True):
+        for r in active:
+            run = self.runs[r]
             for i, name in enumerate(run.names):
                 scripted = run.agents[name]
                 if isinstance(scripted, ScriptedAgent):
-                    put_actions(run_actions, i, scripted.act_batch(run.obs[:, i]))
+                    put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
 
-        steps = [run.env.step(run_actions) for run, run_actions in zip(self.runs, actions, strict=True)]
+        steps = {r: self.runs[r].env.step(actions[r]) for r in active}
         for group, (obs, chosen) in zip(self.groups, decided, strict=True):
             rows = []
             for r, i in zip(group.runs, group.indices, strict=True):
@@ -408,7 +414,32 @@ class Trainer:
                 for agent, r, loss in zip(group.agents, group.runs, losses, strict=True):
                     self.runs[r].last_losses[agent.name] = float(loss)
 
-        for run, run_actions, (next_obs, rewards, terminated, truncated, info) in zip(
-            self.runs, actions, steps, strict=True
-        ):
-            run.after_step(run_actions, (next_obs, rewards, terminated, truncated), info)
+        for r in active:
+            next_obs, rewards, terminated, truncated, info = steps[r]
+            self.runs[r].after_step(actions[r], (next_obs, rewards, terminated, truncated), info)
+        if any(self.runs[r].finished for r in active):
+            self._drop_finished()
+
+    def _drop_finished(self) -> None:
+        """Finished runs leave their groups: the other members go on in a learner of their own
+        (:meth:`DQNLearner.take`, the same arithmetic), each finished member keeps its final
+        state in a learner of one."""
+        groups = []
+        for group in self.groups:
+            members = list(zip(group.agents, group.indices, group.runs, strict=True))
+            going_on = [m for m, (_, _, r) in enumerate(members) if not self.runs[r].finished]
+            if len(going_on) == len(members):
+                groups.append(group)
+                continue
+            for m, (agent, _, r) in enumerate(members):
+                if self.runs[r].finished:
+                    agent.learner, agent.member = group.learner.take([m]), 0
+                    self.runs[r].learner = agent.learner
+            if going_on:
+                learner = group.learner.take(going_on)
+                kept = [members[m] for m in going_on]
+                for new_member, (agent, _, r) in enumerate(kept):
+                    agent.learner, agent.member = learner, new_member
+                    self.runs[r].learner = learner
+                groups.append(Group(learner, [a for a, _, _ in kept], [i for _, i, _ in kept], [r for _, _, r in kept]))
+        self.groups = groups

@@ -79,15 +79,16 @@ def short_training(seed: int) -> Trainer:
 
 def test_same_seed_same_weights() -> None:
     a, b, c = short_training(5), short_training(5), short_training(6)
-    assert a.groups[0].learner.updates > 0
-    for ga, gb, gc in zip(a.groups, b.groups, c.groups, strict=True):
-        for (name, pa), pb, pc in zip(
+    assert a.agents["predator_0"].learner.updates > 0
+    for name in a.agents:
+        ga, gb, gc = (t.agents[name] for t in (a, b, c))
+        for (key, pa), pb, pc in zip(
             ga.learner.online.state_dict().items(),
             gb.learner.online.state_dict().values(),
             gc.learner.online.state_dict().values(),
             strict=True,
         ):
-            assert torch.equal(pa, pb), name
+            assert torch.equal(pa, pb), (name, key)
             assert not torch.equal(pa, pc)
 
 
@@ -104,7 +105,7 @@ def test_save_load_gives_identical_greedy_actions(tmp_path) -> None:
     np.testing.assert_array_equal(other.q_values(obs), agent.q_values(obs))
     np.testing.assert_array_equal(other.act_batch(obs), agent.act_batch(obs))
     assert other.learner.steps == agent.learner.steps
-    assert len(other.learner.replays[other.member]) == len(agent.learner.replays[agent.member])
+    assert len(other.learner.replay) == len(agent.learner.replay)
     # a checkpoint refuses another condition or another kind of agent
     with pytest.raises(ValueError, match="condition '2p-low-shared', not '2p-high-shared'"):
         load_agent(other, path, condition="2p-high-shared")

@@ -129,8 +129,12 @@ def test_one_batched_update_equals_separate_updates() -> None:
             )
             for _ in range(3)
         ]
-        stacked_losses = stacked.learn(batches)
-        single_losses = [single.learn([b])[0] for single, b in zip(singles, batches, strict=True)]
+        together = Batch(*(np.stack([getattr(b, f) for b in batches]) for f in Batch.__dataclass_fields__))
+        stacked_losses = stacked.learn(together)
+        single_losses = [
+            single.learn(Batch(*(getattr(b, f)[None] for f in Batch.__dataclass_fields__)))[0]
+            for single, b in zip(singles, batches, strict=True)
+        ]
         np.testing.assert_allclose(stacked_losses, single_losses, rtol=1e-5)
     for m, single in enumerate(singles):
         for k, v in single.online.state_dict().items():

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pursuit_bench.agents.config import PAPER
-from pursuit_bench.agents.replay import CumulativeSumSampler, PrioritizedReplay, SumTreeSampler
+from pursuit_bench.agents.replay import CumulativeSumSampler, PrioritizedReplay, ReplayStack, SumTreeSampler
 
 SAMPLERS = ["flat", "tree"]
 
@@ -118,3 +118,40 @@ def test_state_round_trip() -> None:
     assert (other.position, len(other), other.max_priority) == (replay.position, len(replay), replay.max_priority)
     with pytest.raises(ValueError, match="does not fit"):
         PrioritizedReplay(20, 4).load_state_dict(replay.state_dict())
+
+
+@pytest.mark.parametrize("prioritized", [True, False])
+def test_a_replay_stack_samples_each_member_as_its_own_replay(prioritized: bool) -> None:
+    """One sampling call and one priority update over the member axis, equal to per-member
+    replays drawing from the same generators, through wrap-around and repeated draws."""
+    members, capacity, n_obs = 4, 50, 3
+    stack = ReplayStack(members, capacity, n_obs, alpha=0.6, prioritized=prioritized)
+    singles = [PrioritizedReplay(capacity, n_obs, alpha=0.6, prioritized=prioritized, sampler="flat") for _ in range(4)]
+    data = np.random.default_rng(0)
+    rngs_a = [np.random.default_rng(10 + m) for m in range(members)]
+    rngs_b = [np.random.default_rng(10 + m) for m in range(members)]
+    for step in range(12):
+        k = 7
+        obs = data.normal(size=(members, k, n_obs)).astype(np.float32)
+        actions = data.integers(0, 5, size=(members, k))
+        rewards = data.normal(size=(members, k)).astype(np.float32)
+        terminated = (data.random((members, k)) < 0.1).astype(np.float32)
+        stack.add(obs, actions, rewards, obs + 1, terminated)
+        for m, single in enumerate(singles):
+            single.add(obs[m], actions[m], rewards[m], obs[m] + 1, terminated[m])
+        batch = stack.sample(16, 0.4 + 0.05 * step, rngs_a)
+        td = data.normal(size=(members, 16)) * 3
+        stack.update_priorities(batch.indices, td)
+        for m, single in enumerate(singles):
+            mine = single.sample(16, 0.4 + 0.05 * step, rngs_b[m])
+            for name in ("indices", "obs", "actions", "rewards", "next_obs", "terminated", "weights"):
+                np.testing.assert_array_equal(getattr(batch, name)[m], getattr(mine, name))
+            single.update_priorities(mine.indices, td[m])
+    for m, single in enumerate(singles):
+        theirs, ours = single.state_dict(), stack.member_state(m)
+        assert theirs.keys() == ours.keys()
+        for key in theirs:
+            np.testing.assert_array_equal(ours[key], theirs[key])
+    kept = stack.take([3, 1])
+    np.testing.assert_array_equal(kept.member_state(0)["priorities"], stack.member_state(3)["priorities"])
+    np.testing.assert_array_equal(kept.obs[1], stack.obs[1])

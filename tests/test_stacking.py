@@ -36,10 +36,12 @@ pytestmark = pytest.mark.usefixtures("one_thread")
 def test_a_run_alone_equals_the_same_run_in_a_stack(condition: str) -> None:
     other = "1p-low" if condition.startswith("1p") else "2p-high-shared"
     alone, (alone_rows,) = train([config(condition, 3)])
-    stack, stack_rows = train([config(condition, 7, episodes=30), config(other, 1), config(condition, 3)])
-    assert len(stack.groups) == 2 and stack.groups[0].learner.members == 3 * (len(stack.runs[0].names) - 1)
+    configs = [config(condition, 7, episodes=30), config(other, 1), config(condition, 3)]
+    fresh = Trainer(configs)
+    assert len(fresh.groups) == 2 and fresh.groups[0].learner.members == 3 * (len(fresh.runs[0].names) - 1)
+    stack, stack_rows = train(configs)
     assert alone_rows == stack_rows[2] and len(alone_rows) == 24
-    assert alone.groups[0].learner.updates > 0
+    assert alone.agents["predator_0"].learner.updates > 0
     mine, theirs = weights(alone, 0), weights(stack, 2)
     for name in mine:
         for key, value in mine[name].items():
@@ -84,3 +86,29 @@ def test_runs_resumed_at_different_steps_cannot_share_a_stack() -> None:
     with pytest.raises(ValueError, match="same env step"):
         stack.check_lockstep()
     assert np.isfinite(a.runs[0].obs).all()
+
+
+def test_finished_runs_leave_the_stack_without_changing_anyone() -> None:
+    """A run's metrics and weights are the same alone, beside companions that finish before it
+    and beside ones that finish after it; finished runs' members leave the stacked learners."""
+    alone, (alone_rows,) = train([config("2p-low-individual", 5, episodes=20)])
+    early = [config("2p-low-individual", 8, episodes=6), config("2p-low-individual", 5, episodes=20)]
+    late = [config("2p-low-individual", 5, episodes=20), config("2p-low-individual", 9, episodes=40)]
+    trainer = Trainer(early)
+    sizes = set()
+    while not trainer.finished:
+        trainer.step()
+        sizes.add(tuple(g.learner.members for g in trainer.groups))
+    assert (4, 2) in sizes and (2, 1) in sizes  # 2 predators + a prey per run, then one run left
+    assert trainer.groups == [] and trainer.runs[0].episodes_done == 6
+    for stack, place in ((early, 1), (late, 0)):
+        finished, rows = train(stack)
+        assert rows[place] == alone_rows
+        mine, theirs = weights(alone, 0), weights(finished, place)
+        for name in mine:
+            for key, value in mine[name].items():
+                assert torch.equal(value, theirs[name][key]), (stack, name, key)
+        obs = finished.runs[place].obs[:, 0]  # a finished run's agents still act, from their final weights
+        np.testing.assert_array_equal(
+            finished.runs[place].agents["predator_0"].act_batch(obs), alone.agents["predator_0"].act_batch(obs)
+        )

@@ -12,7 +12,8 @@ import pytest
 from cli_helpers import run_cli
 
 from pursuit_bench import runs
-from pursuit_bench.sweep import SweepPlan, stacks
+from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.sweep import SweepPlan, expected_cost, stacks
 
 SWEEP = ["sweep", "--conditions", "1p-high,2p-high-shared", "--seeds", "2", "--episodes", "40"]
 SWEEP += ["--eval-episodes", "50", "--workers", "2", "--checkpoint-every", "10"]
@@ -153,3 +154,33 @@ def test_the_ray_backend_without_ray_says_which_extra(tmp_path: Path, monkeypatc
         str(tmp_path / "s"),
     )
     assert code == 2 and "pip install 'pursuit-bench[ray]'" in output and "Traceback" not in output
+
+
+def test_stacks_are_planned_by_expected_cost() -> None:
+    """The paper's sweep on 2 workers: stacks taken longest first by whichever worker is free
+    give both workers about half the expected cost (by count they would not)."""
+    plan = SweepPlan(conditions=tuple(CONDITIONS), seeds=5, episodes=15_000)
+    configs = plan.runs()
+    planned = stacks(plan, list(configs), workers=2)
+    costs = [sum(expected_cost(configs[n]) for n in stack) for stack in planned]
+    assert costs == sorted(costs, reverse=True)
+    loads = [0.0, 0.0]
+    for cost in costs:
+        loads[loads.index(min(loads))] += cost
+    assert max(loads) < 0.55 * sum(costs), loads
+    assert expected_cost(configs["1p-high-hierarchical-seed0"]) > 5 * expected_cost(
+        configs["1p-low-hierarchical-seed0"]
+    )
+
+
+def test_kept_checkpoints_are_evaluated_like_the_final_one(tmp_path: Path) -> None:
+    out = tmp_path / "s"
+    command = ["sweep", "--conditions", "1p-low", "--seeds", "1", "--episodes", "16", "--eval-episodes", "8"]
+    code, output = run_cli(*command, "--workers", "1", "--no-record", "--keep-checkpoints", "8", "--out", str(out))
+    assert code == 0, output
+    folder = out / "runs" / "1p-low-hierarchical-seed0"
+    assert runs.load_checkpoint(folder, runs.milestone_checkpoint(8))["episodes_done"] == 8
+    early, final = (json.loads((folder / name).read_text()) for name in ("eval-ep8.json", "eval.json"))
+    assert early["trained_episodes"] == 8 and final["trained_episodes"] == 16
+    code, output = run_cli(*command, "--workers", "1", "--keep-checkpoints", "20", "--out", str(tmp_path / "t"))
+    assert code == 2 and "keep_checkpoints=[20]" in output

@@ -20,7 +20,7 @@ import torch.nn.functional as F
 from pursuit_bench.agents.adam import FlatAdam
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
-from pursuit_bench.agents.replay import Batch, PrioritizedReplay
+from pursuit_bench.agents.replay import Batch, ReplayStack
 
 #: Inputs added to the observation by ``AgentConfig.wall_features``.
 WALL_FEATURES = 2
@@ -79,16 +79,14 @@ class DQNLearner:
         self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
         self.target.requires_grad_(False)
         self.optimizer = FlatAdam(self.online, lr=config.learning_rate)
-        self.replays = [
-            PrioritizedReplay(
-                config.buffer_size,
-                n_obs,
-                alpha=config.alpha,
-                priority_epsilon=config.priority_epsilon,
-                prioritized=config.prioritized,
-            )
-            for _ in range(members)
-        ]
+        self.replay = ReplayStack(
+            members,
+            config.buffer_size,
+            n_obs,
+            alpha=config.alpha,
+            priority_epsilon=config.priority_epsilon,
+            prioritized=config.prioritized,
+        )
         self.rngs = [np.random.default_rng(s) for s in seeds]  # exploration and replay sampling
         self.steps = 0  # transitions stored per member
         self.updates = 0
@@ -139,8 +137,7 @@ class DQNLearner:
     ) -> None:
         """Store k transitions per member (arrays (M, k, …)) and copy the target net whenever
         another ``target_update_every`` transitions have been stored."""
-        for m, replay in enumerate(self.replays):
-            replay.add(obs[m], actions[m], rewards[m], next_obs[m], terminated[m])
+        self.replay.add(obs, actions, rewards, next_obs, terminated)
         k = actions.shape[1]
         self.steps += k
         if self.steps >= self.config.learning_starts:
@@ -159,38 +156,56 @@ class DQNLearner:
 
     def update(self) -> np.ndarray:
         """One gradient step for every member on its own prioritized batch; losses (M,)."""
-        beta, size = self.beta, self.config.batch_size
-        return self.learn([replay.sample(size, beta, rng) for replay, rng in zip(self.replays, self.rngs, strict=True)])
+        return self.learn(self.replay.sample(self.config.batch_size, self.beta, self.rngs))
 
-    def learn(self, batches: list[Batch]) -> np.ndarray:
-        """One gradient step on the given batches (one per member), then their new priorities."""
-        losses, td = self.loss(batches)
+    def learn(self, batch: Batch) -> np.ndarray:
+        """One gradient step on a batch with the member axis first (M, B, …), then its new
+        priorities."""
+        losses, td = self.loss(batch)
         self.optimizer.zero_grad()
         losses.sum().backward()
         self.optimizer.step()
-        td_np = td.detach().numpy()
-        for m, (replay, batch) in enumerate(zip(self.replays, batches, strict=True)):
-            replay.update_priorities(batch.indices, td_np[m])
+        self.replay.update_priorities(batch.indices, td.detach().numpy())
         self.updates += 1
         return losses.detach().numpy()
 
-    def loss(self, batches: list[Batch]) -> tuple[torch.Tensor, torch.Tensor]:
+    def loss(self, batch: Batch) -> tuple[torch.Tensor, torch.Tensor]:
         """Per-member losses (M,) and TD errors (M, B): the Huber loss of ``Q(s, a) - y``
         weighted by the importance weights, averaged over the batch."""
-
-        def stack(name: str, dtype: torch.dtype) -> torch.Tensor:
-            return torch.as_tensor(np.stack([getattr(b, name) for b in batches]), dtype=dtype)
-
-        obs, next_obs = self.encode(stack("obs", torch.float32)), self.encode(stack("next_obs", torch.float32))
-        actions = stack("actions", torch.int64)
-        rewards, terminated = stack("rewards", torch.float32), stack("terminated", torch.float32)
-        weights = stack("weights", torch.float32)
+        obs, next_obs = self.encode(batch.obs), self.encode(batch.next_obs)
+        actions = torch.as_tensor(batch.actions, dtype=torch.int64)
+        rewards = torch.as_tensor(batch.rewards, dtype=torch.float32)
+        terminated = torch.as_tensor(batch.terminated, dtype=torch.float32)
+        weights = torch.as_tensor(batch.weights, dtype=torch.float32)
         q = self.online(obs).gather(-1, actions.unsqueeze(-1)).squeeze(-1)
         with torch.no_grad():
             online_next = self.online(next_obs)
         y = double_dqn_targets(online_next, self.target, rewards, next_obs, terminated, self.config.gamma)
         per_sample = F.huber_loss(q, y, reduction="none", delta=self.config.huber_delta)
         return (weights * per_sample).mean(dim=1), q - y
+
+    def take(self, members: Sequence[int]) -> DQNLearner:
+        """A learner of these members only (in this order), each with its parameters, target,
+        Adam moments, replay, generator and the shared counters: it learns on exactly as they
+        would have in this one (a stack's finished runs leave it this way)."""
+        keep = list(members)
+        new = DQNLearner(self.n_obs, self.n_actions, self.config, members=len(keep), seed=[0] * len(keep))
+        with torch.no_grad():
+            for mine, theirs in ((self.online, new.online), (self.target, new.target)):
+                for param, new_param in zip(mine.parameters(), theirs.parameters(), strict=True):
+                    new_param.copy_(param[keep])
+            for source, destination in zip(
+                self.optimizer.exp_avg + self.optimizer.exp_avg_sq,
+                new.optimizer.exp_avg + new.optimizer.exp_avg_sq,
+                strict=True,
+            ):
+                destination.copy_(source[keep])
+        new.optimizer.step_count = self.optimizer.step_count
+        new.replay = self.replay.take(keep)
+        new.rngs = [self.rngs[m] for m in keep]
+        new.steps, new.updates = self.steps, self.updates
+        new._owed_updates, new._next_target_copy = self._owed_updates, self._next_target_copy
+        return new
 
     def member_weights(self, m: int) -> dict[str, torch.Tensor]:
         """Member m's online network: its parameters by name, without the member axis."""
@@ -219,7 +234,7 @@ class DQNLearner:
             "adam_exp_avg_sq": [avg_sq[m].clone() for avg_sq in adam.exp_avg_sq],
             "replay": {
                 k: (torch.from_numpy(v) if isinstance(v, np.ndarray) else v)
-                for k, v in self.replays[m].state_dict().items()
+                for k, v in self.replay.member_state(m).items()
             },
             "steps": self.steps,
             "updates": self.updates,
@@ -242,7 +257,7 @@ class DQNLearner:
                 if avg is not None:  # None: a parameter that had no Adam state yet
                     exp_avg[m], exp_avg_sq[m] = avg, avg_sq
         replay = {k: (v.numpy() if isinstance(v, torch.Tensor) else v) for k, v in state["replay"].items()}
-        self.replays[m].load_state_dict(replay)
+        self.replay.load_member_state(m, replay)
         self.steps, self.updates = int(state["steps"]), int(state["updates"])
         self._owed_updates, self._next_target_copy = float(state["owed_updates"]), int(state["next_target_copy"])
         self.rngs[m].bit_generator.state = state["rng"]

@@ -225,3 +225,145 @@ class PrioritizedReplay:
             getattr(self, name)[:n] = np.asarray(state[name])
         self.size, self.position, self.max_priority = n, int(state["position"]), float(state["max_priority"])
         self._set_priorities(np.arange(n), np.asarray(state["priorities"], dtype=np.float64))
+
+
+class ReplayStack:
+    """M prioritized replays, one per member of a stacked learner, their arrays stacked on a
+    member axis so that sampling and priority updates are one call for all members.
+
+    Member m behaves exactly as a :class:`PrioritizedReplay` with the flat sampler fed the same
+    transitions and drawing from the same generator (``tests/test_replay.py`` checks it): the
+    same cumulative sums, the same draws, the same weights. Members add transitions in
+    lockstep (the same number each time), so the write position and size are shared.
+    """
+
+    def __init__(
+        self,
+        members: int,
+        capacity: int,
+        n_obs: int,
+        *,
+        alpha: float = 0.6,
+        priority_epsilon: float = 1e-4,
+        prioritized: bool = True,
+    ) -> None:
+        if capacity < 1:
+            raise ValueError(f"capacity={capacity!r}: expected an integer >= 1")
+        self.members, self.capacity, self.n_obs = members, capacity, n_obs
+        self.alpha, self.priority_epsilon, self.prioritized = alpha, priority_epsilon, prioritized
+        self.obs = np.zeros((members, capacity, n_obs), dtype=np.float32)
+        self.next_obs = np.zeros((members, capacity, n_obs), dtype=np.float32)
+        self.actions = np.zeros((members, capacity), dtype=np.int64)
+        self.rewards = np.zeros((members, capacity), dtype=np.float32)
+        self.terminated = np.zeros((members, capacity), dtype=np.float32)
+        self.priorities = np.zeros((members, capacity))  # |δ| + ε, before the exponent α
+        self.scaled = np.zeros((members, capacity))  # priorities ** α: what sampling draws from
+        self.max_priority = np.ones(members)
+        self.position = 0
+        self.size = 0
+
+    def __len__(self) -> int:
+        return self.size
+
+    def add(
+        self, obs: np.ndarray, actions: np.ndarray, rewards: np.ndarray, next_obs: np.ndarray, terminated: np.ndarray
+    ) -> None:
+        """Store k transitions per member (arrays (M, k, …)) at each member's largest priority."""
+        k = actions.shape[1]
+        slots = (self.position + np.arange(k)) % self.capacity
+        self.obs[:, slots] = obs
+        self.actions[:, slots] = actions
+        self.rewards[:, slots] = rewards
+        self.next_obs[:, slots] = next_obs
+        self.terminated[:, slots] = terminated
+        self._set_priorities(slots[None, :], np.repeat(self.max_priority[:, None], k, axis=1))
+        self.position = int((self.position + k) % self.capacity)
+        self.size = min(self.size + k, self.capacity)
+
+    def _set_priorities(self, slots: np.ndarray, priorities: np.ndarray) -> None:
+        rows = np.arange(self.members)[:, None]
+        self.priorities[rows, slots] = priorities
+        self.scaled[rows, slots] = priorities**self.alpha
+
+    def sample(self, batch_size: int, beta: float, rngs: list[np.random.Generator]) -> Batch:
+        """``batch_size`` transitions per member (with replacement), member m drawing from
+        ``rngs[m]``; every array of the batch has the member axis first, (M, B, …)."""
+        if self.size == 0:
+            raise ValueError("sample() from an empty replay: add transitions first")
+        n, m_all = self.size, np.arange(self.members)[:, None]
+        if not self.prioritized:
+            indices = np.stack([rng.integers(0, n, size=batch_size) for rng in rngs])
+            weights = np.ones((self.members, batch_size), dtype=np.float32)
+        else:
+            scaled = self.scaled[:, :n]
+            cumulative = np.cumsum(scaled, axis=1)
+            fractions = np.stack([rng.random(batch_size) for rng in rngs])
+            targets = fractions * cumulative[:, -1:]
+            indices = np.stack([np.searchsorted(c, t, side="right") for c, t in zip(cumulative, targets, strict=True)])
+            over = indices >= n  # rounding at the very top: to the last slot with a value
+            for m in np.flatnonzero(over.any(axis=1)):
+                indices[m, over[m]] = np.flatnonzero(scaled[m])[-1]
+            probabilities = scaled[m_all, indices] / scaled.sum(axis=1, keepdims=True)
+            w = (n * probabilities) ** -beta
+            weights = (w / w.max(axis=1, keepdims=True)).astype(np.float32)
+        return Batch(
+            indices=indices,
+            obs=self.obs[m_all, indices],
+            actions=self.actions[m_all, indices],
+            rewards=self.rewards[m_all, indices],
+            next_obs=self.next_obs[m_all, indices],
+            terminated=self.terminated[m_all, indices],
+            weights=weights,
+        )
+
+    def update_priorities(self, indices: np.ndarray, td_errors: np.ndarray) -> None:
+        """Set the priorities of sampled transitions (M, B) to ``|δ| + ε``."""
+        if not self.prioritized:
+            return
+        priorities = np.abs(np.asarray(td_errors, dtype=np.float64)) + self.priority_epsilon
+        rows = np.arange(self.members)[:, None]
+        self.priorities[rows, indices] = priorities  # a slot drawn twice keeps its last value
+        self.scaled[rows, indices] = self.priorities[rows, indices] ** self.alpha
+        self.max_priority = np.maximum(self.max_priority, priorities.max(axis=1))
+
+    def member_state(self, m: int) -> dict[str, Any]:
+        """Member m's replay as :meth:`PrioritizedReplay.state_dict` writes it."""
+        n = self.size
+        return {
+            "obs": self.obs[m, :n].copy(),
+            "next_obs": self.next_obs[m, :n].copy(),
+            "actions": self.actions[m, :n].copy(),
+            "rewards": self.rewards[m, :n].copy(),
+            "terminated": self.terminated[m, :n].copy(),
+            "priorities": self.priorities[m, :n].copy(),
+            "position": self.position,
+            "size": n,
+            "max_priority": float(self.max_priority[m]),
+        }
+
+    def load_member_state(self, m: int, state: dict[str, Any]) -> None:
+        """Restore member m from :meth:`member_state` (or :meth:`PrioritizedReplay.state_dict`)."""
+        n = int(state["size"])
+        if n > self.capacity or np.asarray(state["obs"]).shape[1:] != self.obs.shape[2:]:
+            raise ValueError("replay state does not fit this replay (capacity or observation size differ)")
+        for name in ("obs", "next_obs", "actions", "rewards", "terminated"):
+            getattr(self, name)[m, :n] = np.asarray(state[name])
+        self.size, self.position = n, int(state["position"])
+        self.max_priority[m] = float(state["max_priority"])
+        self.priorities[m, :n] = np.asarray(state["priorities"], dtype=np.float64)
+        self.scaled[m, :n] = self.priorities[m, :n] ** self.alpha
+
+    def take(self, members: list[int]) -> ReplayStack:
+        """A new stack holding (copies of) these members' replays, in this order."""
+        new = ReplayStack(
+            len(members),
+            self.capacity,
+            self.n_obs,
+            alpha=self.alpha,
+            priority_epsilon=self.priority_epsilon,
+            prioritized=self.prioritized,
+        )
+        for name in ("obs", "next_obs", "actions", "rewards", "terminated", "priorities", "scaled", "max_priority"):
+            setattr(new, name, getattr(self, name)[members].copy())
+        new.position, new.size = self.position, self.size
+        return new

@@ -548,6 +548,16 @@ def _names(value: str, known: list[str] | tuple[str, ...], what: str) -> tuple[s
     return names
 
 
+def _episode_counts(value: str) -> tuple[int, ...]:
+    """A comma-separated list of episode counts (possibly empty)."""
+    try:
+        return tuple(sorted({int(v) for v in value.split(",") if v.strip()}))
+    except ValueError:
+        raise BadInput(
+            f"--keep-checkpoints {value!r}: expected comma-separated episode counts, e.g. 1500,5000"
+        ) from None
+
+
 @main.command()
 @click.option(
     "--conditions",
@@ -589,6 +599,12 @@ def _names(value: str, known: list[str] | tuple[str, ...], what: str) -> tuple[s
     default=None,
     help="With --backend ray: the cluster to join ('auto' or HOST:PORT) [a local Ray instance started for the sweep].",
 )
+@click.option(
+    "--keep-checkpoints",
+    default="",
+    help="Comma-separated episode counts at which every run keeps its checkpoint, evaluated like the final one "
+    "(eval-epN.json): learning against budget, e.g. 1500,5000.",
+)
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="Sweep folder, e.g. sweeps/NAME.")
 @training_options
 def sweep(
@@ -607,6 +623,7 @@ def sweep(
     no_record: bool,
     checkpoint_every: int,
     log_every: int,
+    keep_checkpoints: str,
     out: Path,
     **hyperparameters: Any,
 ) -> None:
@@ -634,24 +651,31 @@ def sweep(
             record_every=record_every,
             checkpoint_every=checkpoint_every,
             preset=preset,
+            keep_checkpoints=_episode_counts(keep_checkpoints),
         )
         sweeps.open_sweep(out, plan)
     except ValueError as error:
         raise BadInput(str(error)) from None
     configs = plan.runs()
-    status = {name: sweeps.run_status(out / "runs" / name, c) for name, c in configs.items()}
+    status = {name: sweeps.run_status(out / "runs" / name, c, plan.keep_checkpoints) for name, c in configs.items()}
     done = {name: episodes for name, (episodes, _) in status.items()}
     finished = {name for name, (_, evaluated) in status.items() if evaluated}
     total = sum(c.episodes for c in configs.values())
-    start, start_done = time.monotonic(), sum(done.values())
+    per_episode = {name: sweeps.expected_cost(c) / c.episodes for name, c in configs.items()}
+
+    def work_done() -> float:  # the ETA counts expected transitions × learners, not episodes
+        return sum(per_episode[name] * n for name, n in done.items())
+
+    work_total = sum(sweeps.expected_cost(c) for c in configs.values())
+    start, start_work = time.monotonic(), work_done()
 
     def describe() -> str:
-        rate = (sum(done.values()) - start_done) / max(time.monotonic() - start, 1e-9)
-        eta = (total - sum(done.values())) / rate if rate > 0 else float("nan")
+        rate = (work_done() - start_work) / max(time.monotonic() - start, 1e-9)
+        eta = (work_total - work_done()) / rate if rate > 0 else float("nan")
         left = "?" if eta != eta else time.strftime("%H:%M:%S", time.gmtime(eta))
         return f"runs done {len(finished)}/{len(configs)} | ETA {left}"
 
-    progress = Progress(f"sweep {out}", total, start_done, describe, every_episodes=log_every)
+    progress = Progress(f"sweep {out}", total, sum(done.values()), describe, every_episodes=log_every)
 
     def on_message(kind: str, name: str, value: Any) -> None:
         if kind == "episode":
