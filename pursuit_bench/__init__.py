@@ -43,7 +43,30 @@ _LAZY = {
 }
 
 
+#: The library's modules, imported on first use as attributes (``pursuit_bench.pretrained.info``).
+_SUBMODULES = {
+    "analysis",
+    "conditions",
+    "evaluate",
+    "guidance",
+    "navigation",
+    "policies",
+    "pretrained",
+    "recording",
+    "report",
+    "runs",
+    "stack",
+    "sweep",
+    "task",
+    "train",
+    "vector",
+    "world",
+}
+
+
 def __getattr__(name: str) -> Any:
+    if name in _SUBMODULES:
+        return importlib.import_module(f"pursuit_bench.{name}")
     if name in _LAZY:
         value = getattr(importlib.import_module(_LAZY[name]), name)
         globals()[name] = value

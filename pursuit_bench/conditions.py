@@ -13,6 +13,8 @@ from typing import Literal
 
 RewardSharing = Literal["shared", "individual"]
 WallRule = Literal["terminate", "contain"]
+#: Physics backends of the world: pymunk (the reference) or its numpy twin.
+Backend = Literal["pymunk", "numpy"]
 
 #: Cost of one step in chase mode, by name (paper 3.2). Stalk mode costs nothing.
 CHASE_COSTS: dict[str, float] = {"low": 0.01, "high": 0.1}

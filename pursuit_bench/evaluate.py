@@ -50,13 +50,15 @@ def run_episodes(
     recorder: Recorder | None = None,
     record: Callable[[int], bool] = lambda episode: True,
     on_step: Callable[[np.ndarray, np.ndarray, np.ndarray], None] | None = None,
+    check: Callable[[], None] = lambda: None,
 ) -> Episodes:
     """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
     ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
     ``recorder``, the episodes numbered (from 1, in the order they end) where ``record`` says so
     go into it, with the hierarchical predators' Q-values and V(s). ``on_step(obs, actions,
     done)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
-    (B, n_agents, 2) and which arenas' episodes the step ended (B,)."""
+    (B, n_agents, 2) and which arenas' episodes the step ended (B,). ``check()`` is called
+    before every step: the place to stop (by raising) when the caller was asked to."""
     env = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend)
     epsilons = epsilons or {}
     names, n_pred = env.agents, env.n_agents - 1
@@ -66,6 +68,7 @@ def run_episodes(
     travelled = np.zeros((env.num_envs, env.n_agents))
     rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray, np.ndarray]] = []
     while len(rows) < episodes:
+        check()
         actions = np.zeros((env.num_envs, env.n_agents, 2), dtype=np.int64)
         q_values = np.full((env.num_envs, n_pred, 2), np.nan)
         values = np.full((env.num_envs, n_pred), np.nan)
@@ -130,6 +133,7 @@ def evaluate_agents(
     recorder: Recorder | None = None,
     backend: Backend = "pymunk",
     predator_kind: str | None = None,
+    check: Callable[[], None] = lambda: None,
 ) -> dict[str, Any]:
     """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
     learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
@@ -143,7 +147,8 @@ def evaluate_agents(
     Each panel holds the mean returns ``trained`` (the predator as trained), ``always_chase``
     and ``always_stalk``, their standard errors and every episode's return (``stderr``,
     ``episode_returns``, keyed alike); ``predator_kind`` names what the trained predators are (``hierarchical``,
-    ``flat``, …; by default read from the first predator's ``kind``)."""
+    ``flat``, …; by default read from the first predator's ``kind``). ``check()`` is called
+    before every step (:func:`run_episodes`)."""
     names = list(agents)
     predators, prey = names[:-1], names[-1]
     kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
@@ -151,7 +156,15 @@ def evaluate_agents(
 
     def play(actors: dict[str, Actor], rec: Recorder | None = None) -> Episodes:
         return run_episodes(
-            condition, actors, episodes, seed=seed, num_envs=num_envs, epsilons=epsilons, recorder=rec, backend=backend
+            condition,
+            actors,
+            episodes,
+            seed=seed,
+            num_envs=num_envs,
+            epsilons=epsilons,
+            recorder=rec,
+            backend=backend,
+            check=check,
         )
 
     trained = play(agents, recorder)
@@ -171,7 +184,7 @@ def evaluate_agents(
     captured = trained.captured
     prey_check = None
     if prey_epsilon is not None:  # a learning prey: greedy, and the scripted one in its place
-        greedy = run_episodes(condition, agents, episodes, seed=seed, num_envs=num_envs, backend=backend)
+        greedy = run_episodes(condition, agents, episodes, seed=seed, num_envs=num_envs, backend=backend, check=check)
         fleeing = run_episodes(
             condition,
             {**agents, prey: ScriptedAgent(prey, FleeingPrey())},
@@ -179,6 +192,7 @@ def evaluate_agents(
             seed=seed,
             num_envs=num_envs,
             backend=backend,
+            check=check,
         )
         prey_check = {
             name: {

@@ -15,27 +15,52 @@ BASELINES = (("always_chase", "always chase", "#dd8452"), ("always_stalk", "alwa
 TRAINED_COLOR = "#4c72b0"
 
 
-def reward_bars_png(result: dict[str, Any]) -> bytes:
+def reward_bars_png(result: dict[str, Any], run: str | None = None) -> bytes:
     """PNG bytes of one panel per predator: three bars (the trained predator, labelled by its
-    kind; always chase; always stalk)."""
+    kind; always chase; always stalk), each with its standard error; the title names the run
+    (``run``, or the shipped agents' condition and seed) and the evaluation."""
     panels = result["panels"]
     bars = (("trained", result.get("predator_kind", "trained"), TRAINED_COLOR), *BASELINES)
-    fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels) + 0.8, 3.4), squeeze=False, sharey=True)
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels) + 0.8, 3.6), squeeze=False, sharey=True)
+    low = min(min(p[k] - p["stderr"][k] for k, _, _ in bars) for p in panels)
+    high = max(max(p[k] + p["stderr"][k] for k, _, _ in bars) for p in panels)
+    margin = 0.18 * max(high - low, 0.1)
     for ax, panel in zip(axes[0], panels, strict=True):
         values = [panel[key] for key, _, _ in bars]
+        errors = [panel["stderr"][key] for key, _, _ in bars]
         ax.bar([label for _, label, _ in bars], values, color=[color for _, _, color in bars])
+        ax.errorbar(range(len(values)), values, yerr=errors, fmt="none", color="black", capsize=3, lw=1)
         ax.axhline(0.0, color="black", linewidth=0.8)
         ax.set_title(panel["predator"])
         ax.tick_params(axis="x", labelrotation=20)
-        for x, v in enumerate(values):
-            ax.annotate(f"{v:.2f}", (x, v), ha="center", va="bottom" if v >= 0 else "top", fontsize=8)
-    axes[0][0].set_ylabel("mean cumulative reward")
-    fig.suptitle(f"{result['condition']}: {result['episodes']} episodes, seed {result['seed']}")
+        for x, (v, e) in enumerate(zip(values, errors, strict=True)):
+            y = v + e if v >= 0 else v - e
+            ax.annotate(f"{v:+.2f}", (x, y), ha="center", va="bottom" if v >= 0 else "top", fontsize=8)
+        ax.set_ylim(min(low, 0.0) - margin, max(high, 0.0) + margin)
+    axes[0][0].set_ylabel("mean cumulative reward (± s.e.)")
+    shipped = result.get("pretrained")
+    if shipped:
+        who = f"shipped agents of {result['condition']} (seed {shipped.get('seed', '?')})"
+    else:
+        who = f"{run or 'run'}: {result['condition']}"
+    trained = result.get("trained_episodes")
+    trained_text = f", trained {trained} episodes" if trained is not None else ""
+    fig.suptitle(f"{who}{trained_text}\nevaluation: {result['episodes']} episodes, seed {result['seed']}", fontsize=10)
     fig.tight_layout()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
     plt.close(fig)
     return buffer.getvalue()
+
+
+def interval_words(seeds: int) -> str:
+    """What a plotted interval is, honestly: a bootstrap interval needs a few seeds; with two it
+    is only their spread."""
+    if seeds >= 3:
+        return f"95 % bootstrap interval over {seeds} seeds"
+    if seeds == 2:
+        return "bars span the 2 seeds (too few for a bootstrap interval)"
+    return "1 seed: no interval"
 
 
 #: Bar colours of the report's variants.
@@ -88,20 +113,23 @@ def fig2_png(table: list[dict[str, Any]]) -> bytes:
             ax.tick_params(axis="y", labelsize=7)
         axes[row][0].set_ylabel("mean return", fontsize=8)
     seeds = max(len(v["values"]) for t in table for v in t["variants"].values())
-    fig.suptitle(f"Mean return per predator over {seeds} seeds\n95 % bootstrap interval; dots: seeds", fontsize=10)
+    fig.suptitle(f"Mean return per predator over {seeds} seeds\n{interval_words(seeds)}; dots: seeds", fontsize=10)
     fig.tight_layout()
     return _png(fig)
 
 
 def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     """Learning curves: per condition, every agent's return (top) and the capture rate
-    (bottom) against episodes, mean over seeds with a 95 % band; one line style per kind."""
+    (bottom) against episodes, mean over seeds with their interval; the predators' line style
+    says their kind, the prey is named alone."""
     conditions = list(curves)
     columns = min(5, len(conditions))
     rows = -(-len(conditions) // columns)
     fig, axes = plt.subplots(2 * rows, columns, figsize=(3.4 * columns, 4.6 * rows + 0.6), squeeze=False)
     styles = {"hierarchical": "-", "flat": "--"}
     agent_colors = plt.get_cmap("tab10")
+    kinds = sorted({kind for c in curves.values() for kind in c})
+    seeds = max((curve.get("seeds", 0) for c in curves.values() for curve in c.values()), default=0)
     for i, condition in enumerate(conditions):
         top, bottom = axes[2 * (i // columns)][i % columns], axes[2 * (i // columns) + 1][i % columns]
         for kind, curve in curves[condition].items():
@@ -110,30 +138,31 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
                 ax = bottom if label == "capture_rate" else top
                 color = "black" if label == "capture_rate" else agent_colors(j)
                 name = label.removeprefix("return/")
-                ax.plot(x, series["mean"], styles.get(kind, ":"), color=color, lw=1.2, label=f"{name} ({kind})")
+                shown = name if name.startswith("prey") or len(kinds) == 1 else f"{name} ({kind} predators)"
+                ax.plot(x, series["mean"], styles.get(kind, ":"), color=color, lw=1.2, label=shown)
                 if series["ci"] is not None:
                     ax.fill_between(x, series["ci"][0], series["ci"][1], color=color, alpha=0.15, lw=0)
         top.set_title(condition, fontsize=9)
         top.set_ylabel("return", fontsize=8)
         bottom.set_ylabel("capture rate", fontsize=8)
         bottom.set_xlabel("episode", fontsize=8)
-        bottom.set_ylim(0, 1)
+        bottom.set_ylim(-0.03, 1.03)  # a rate of 1.0 stays inside the frame
         for ax in (top, bottom):
             ax.tick_params(labelsize=7)
         top.legend(fontsize=6, loc="lower right")
     for j in range(len(conditions), rows * columns):
         axes[2 * (j // columns)][j % columns].set_visible(False)
         axes[2 * (j // columns) + 1][j % columns].set_visible(False)
-    fig.suptitle(
-        "Learning curves: mean over seeds, 95 % bootstrap band\nsolid: hierarchical, dashed: flat", fontsize=10
-    )
+    kinds_text = ", ".join(f"{'solid' if k == 'hierarchical' else 'dashed'}: {k}" for k in kinds if k in styles)
+    fig.suptitle(f"Learning curves: mean over seeds, {interval_words(seeds)}\n{kinds_text}", fontsize=10)
     fig.tight_layout()
     return _png(fig)
 
 
-def fig3_png(analysis: dict[str, Any], embeddings: dict[str, Any], closest: dict[str, Any]) -> bytes:
+def fig3_png(analysis: dict[str, Any], embeddings: dict[str, Any], closest: dict[str, Any], title: str = "") -> bytes:
     """The paper's Fig. 3: for each predator, its value stream's t-SNE embedding coloured by
-    V(s), by its distance to the prey and, with other predators, by whether it is the closest."""
+    V(s), by its distance to the prey and, with other predators, by whether it is the closest
+    (two colours, a legend: a yes/no has no colour bar)."""
     names = list(embeddings)
     several = len(names) > 1
     columns = 3 if several else 2
@@ -142,25 +171,46 @@ def fig3_png(analysis: dict[str, Any], embeddings: dict[str, Any], closest: dict
         xy = embeddings[name]["xy"]
         score = analysis[name]["organisation"]
         panels = [
-            (embeddings[name]["value"], "viridis", f"{name}: V(s) (organisation R² {score['value']:.2f})"),
-            (embeddings[name]["distance"], "magma", f"{name}: distance to prey (R² {score['distance']:.2f})"),
+            (embeddings[name]["value"], "viridis", f"{name}: V(s) (organisation R² {score['value']:.2f})", "V(s)"),
+            (
+                embeddings[name]["distance"],
+                "magma",
+                f"{name}: distance to prey (R² {score['distance']:.2f})",
+                "distance to the prey",
+            ),
         ]
-        if several:
-            panels.append((closest[name].astype(float), "coolwarm", f"{name}: closest to the prey (red)"))
-        for ax, (colour, cmap, title) in zip(axes[row], panels, strict=True):
+        for ax, (colour, cmap, panel_title, unit) in zip(axes[row], panels, strict=False):
             points = ax.scatter(xy[:, 0], xy[:, 1], c=colour, cmap=cmap, s=4, linewidths=0)
-            ax.set_title(title, fontsize=9)
+            ax.set_title(panel_title, fontsize=9)
+            fig.colorbar(points, ax=ax, fraction=0.046, pad=0.02).set_label(unit, fontsize=8)
+        if several:
+            ax = axes[row][2]
+            nearest = closest[name].astype(bool)
+            ax.scatter(xy[~nearest, 0], xy[~nearest, 1], color="#4c72b0", s=4, linewidths=0, label="another is closer")
+            ax.scatter(xy[nearest, 0], xy[nearest, 1], color="#c44e52", s=4, linewidths=0, label="closest to the prey")
+            ax.set_title(f"{name}: closest to the prey?", fontsize=9)
+            ax.legend(fontsize=7, markerscale=3, loc="best")
+        for ax in axes[row]:
             ax.set_xticks([])
             ax.set_yticks([])
-            fig.colorbar(points, ax=ax, fraction=0.046, pad=0.02)
-    fig.suptitle("t-SNE of the value stream's last hidden layer", fontsize=10)
+    heading = "t-SNE of the value stream's last hidden layer"
+    fig.suptitle(f"{title}\n{heading}" if title else heading, fontsize=10)
     fig.tight_layout()
     return _png(fig)
 
 
+def wilson_interval(p: np.ndarray, n: np.ndarray, z: float = 1.96) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson's score interval of proportions ``p`` out of ``n`` (NaN where n = 0)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+        half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return centre - half, centre + half
+
+
 def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
-    """P(chase) against distance to the prey, one line per curve (with its 95 % band when
-    given), and the number of states behind each point as bars below."""
+    """P(chase) against distance to the prey, one line per curve with its 95 % band (over seeds
+    when given, else Wilson's for the states of one run), and the number of states behind each
+    point as bars below; the x axis ends where the data do."""
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.2), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
     colors = plt.get_cmap("tab10")
     for k, (label, curve) in enumerate(curves.items()):
@@ -170,14 +220,62 @@ def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
         top.plot(centres, p, "o-", color=colors(k), ms=3, label=label)
         if curve.get("ci") is not None:
             low, high = (np.array([np.nan if v is None else v for v in c], dtype=float) for c in curve["ci"])
-            top.fill_between(centres, low, high, color=colors(k), alpha=0.15, lw=0)
+        else:  # one run: Wilson's 95 % interval of a proportion, its states counted as independent
+            low, high = wilson_interval(p, np.asarray(curve["states"], dtype=float))
+        top.fill_between(centres, low, high, color=colors(k), alpha=0.15, lw=0)
         width = (bins[1] - bins[0]) / (len(curves) + 1)
         bottom.bar(centres + (k - len(curves) / 2) * width, curve["states"], width=width, color=colors(k))
+    filled = [
+        c
+        for curve in curves.values()
+        for c, n in zip(
+            (np.asarray(curve["bins"])[:-1] + np.asarray(curve["bins"])[1:]) / 2, curve["states"], strict=True
+        )
+        if n
+    ]
+    if filled:  # the x axis ends where the data do
+        step = float(np.diff(np.asarray(next(iter(curves.values()))["bins"]))[0])
+        top.set_xlim(min(filled) - step, max(filled) + step)
     top.set_ylabel("P(chase)")
     top.set_ylim(-0.02, 1.02)
     top.legend(fontsize=8)
     top.set_title(title, fontsize=10)
     bottom.set_ylabel("states")
     bottom.set_xlabel("distance to the prey")
+    fig.tight_layout()
+    return _png(fig)
+
+
+def budget_png(rows: list[dict[str, Any]]) -> bytes:
+    """Panel counts against the training budget: where the hierarchical predator is best, best
+    or tied with the best, and its interval above both baselines'; its mean ratio to the best
+    on a second axis."""
+    fig, ax = plt.subplots(figsize=(6.4, 3.8))
+    episodes = [r["episodes"] for r in rows]
+    panels = rows[-1]["panels"]
+    for key, label, style in (
+        ("hierarchical_best_or_tied", "best or tied with the best", "s--"),
+        ("hierarchical_best", "best (the paper's count)", "o-"),
+        ("hierarchical_interval_above_both", "interval above both baselines", "^:"),
+    ):
+        ax.plot(episodes, [r[key] for r in rows], style, label=label)
+    ax.axhline(16, color="grey", lw=0.8, ls="-.")
+    ax.annotate("paper: best in 16 of 22", (episodes[0], 16), xytext=(3, 3), textcoords="offset points", fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xticks(episodes, [str(e) for e in episodes])
+    ax.set_ylim(0, panels + 0.5)
+    ax.set_xlabel("training episodes per run")
+    ax.set_ylabel(f"panels (of {panels})")
+    ratio_ax = ax.twinx()
+    ratios = [r["mean_ratio_to_best"] for r in rows]
+    ratio_ax.plot(
+        episodes, [np.nan if r is None else r for r in ratios], "x-", color="grey", label="mean ratio to best"
+    )
+    ratio_ax.set_ylim(0, 1.05)
+    ratio_ax.set_ylabel("mean ratio to the best", color="grey")
+    lines = ax.get_legend_handles_labels()
+    extra = ratio_ax.get_legend_handles_labels()
+    ax.legend(lines[0] + extra[0], lines[1] + extra[1], fontsize=7, loc="lower right")
+    ax.set_title("The hierarchical predator against the baselines, by training budget", fontsize=10)
     fig.tight_layout()
     return _png(fig)

@@ -8,7 +8,8 @@ that scrubbing it plays them one after another (the file opens on it).
 Entities (``recordings/README.md`` says the same for users):
 
 - ``arena/walls``: the arena's square (static); ``arena/agents/<agent>``: each disk at its true
-  radius, predators red, the prey blue; ``arena/trails/<agent>``: the last 15 positions.
+  radius, each predator its own warm colour (bright and larger while it chases, dark while it stalks),
+  the prey blue; ``arena/trails/<agent>``: the last 15 positions.
 - ``modes/<predator>``: the mode as a state (stalk/chase), logged at every switch.
 - ``rewards/<agent>``: the reward of each step; ``returns/<agent>``: the return so far.
 - ``events``: captures, agents leaving the area, truncations and mode switches, as a text log.
@@ -36,13 +37,15 @@ import rerun as rr
 import rerun.blueprint as rrb
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
-from pursuit_bench.render import PREDATOR_RGB, PREY_RGB
+from pursuit_bench.render import agent_rgb, dimmed
 from pursuit_bench.task import MODE_NAMES
 from pursuit_bench.world import DT, HALF_SIZE, RADIUS
 
 #: Default folder for ad-hoc recordings.
 RECORDINGS_DIR = Path("recordings")
 TRAIL_LENGTH = 15
+#: A chasing predator's disk is drawn this much larger than its true radius (and bright).
+CHASE_RADIUS = 1.6 * RADIUS
 #: Walls in light grey: the viewer's background is dark (the paper's black square would vanish).
 WALL_RGB = (200, 200, 200)
 #: The reward, mode and value views show this much time up to the cursor: about one episode.
@@ -277,12 +280,12 @@ class Recorder:
         s = self._stream
         _log_arena(s, ("agents", "trails"))
         for name in self.names:
-            color = _rgba(PREY_RGB if name.startswith("prey") else PREDATOR_RGB)
-            s.log(
-                f"arena/agents/{name}",
-                rr.Points2D.from_fields(radii=RADIUS, colors=[color], labels=[name], show_labels=False),
-                static=True,
-            )
+            color = _rgba(agent_rgb(name))
+            if name in self.predators:  # colour and size go with each row (mode): static ones would override them
+                fields = rr.Points2D.from_fields(labels=[name], show_labels=False)
+            else:
+                fields = rr.Points2D.from_fields(radii=RADIUS, colors=[color], labels=[name], show_labels=False)
+            s.log(f"arena/agents/{name}", fields, static=True)
             s.log(f"arena/trails/{name}", rr.LineStrips2D.from_fields(colors=[color], radii=0.004), static=True)
             for kind in ("rewards", "returns"):
                 s.log(f"{kind}/{name}", rr.SeriesLines(colors=[color], names=[f"{kind[:-1]} {name}"]), static=True)
@@ -320,7 +323,17 @@ class Recorder:
         before = _rows(lengths)  # decisions are taken before it
         for i, name in enumerate(self.names):
             paths = [t.positions[:, i] for t in traces]
-            self._send(f"arena/agents/{name}", every, rr.Points2D.columns(positions=np.concatenate(paths)))
+            if i < len(self.predators):  # a predator is drawn bright and larger while it chases
+                chasing = np.concatenate([np.append(t.modes[:, i], t.modes[-1:, i]) for t in traces]).astype(bool)
+                bright, dark = _rgba(agent_rgb(name)), _rgba(dimmed(agent_rgb(name)))
+                columns = rr.Points2D.columns(
+                    positions=np.concatenate(paths),
+                    colors=np.where(chasing, bright, dark).astype(np.uint32),
+                    radii=np.where(chasing, CHASE_RADIUS, RADIUS).astype(np.float32),
+                )
+            else:
+                columns = rr.Points2D.columns(positions=np.concatenate(paths))
+            self._send(f"arena/agents/{name}", every, columns)
             strips = _trail_strips(paths)
             n = len(every[0])
             for lo in range(0, n, TRAIL_ROWS_PER_CHUNK):
@@ -518,7 +531,7 @@ def record_embedding(
     )
     stream.send_columns("embedding/current", indexes=index, columns=current)
     for i, name in enumerate(agent_names):
-        color = PREY_RGB if name.startswith("prey") else PREDATOR_RGB
+        color = agent_rgb(name)
         stream.log(f"arena/agents/{name}", rr.Points2D.from_fields(radii=RADIUS, colors=[_rgba(color)]), static=True)
         stream.send_columns(
             f"arena/agents/{name}",

@@ -8,6 +8,23 @@ from pursuit_bench.world import HALF_SIZE, RADIUS
 
 PREDATOR_RGB = (220, 40, 40)
 PREY_RGB = (40, 80, 220)
+#: One colour per predator (warm hues, told apart from each other and from the blue prey).
+PREDATOR_RGBS = ((220, 40, 40), (240, 150, 20), (200, 60, 200))
+
+
+def agent_rgb(name: str) -> tuple[int, int, int]:
+    """An agent's colour: the prey blue, ``predator_k`` the k-th predator colour."""
+    if name.startswith("prey"):
+        return PREY_RGB
+    return PREDATOR_RGBS[int(name.rsplit("_", 1)[-1]) % len(PREDATOR_RGBS)]
+
+
+def dimmed(rgb: tuple[int, int, int], factor: float = 0.45) -> tuple[int, int, int]:
+    """``rgb`` darkened (a predator stalking; bright when it chases)."""
+    r, g, b = rgb
+    return (int(r * factor), int(g * factor), int(b * factor))
+
+
 WALL_RGB = (0, 0, 0)
 BACKGROUND_RGB = (255, 255, 255)
 

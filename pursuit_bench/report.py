@@ -15,6 +15,8 @@ small sweep has.
 
 from __future__ import annotations
 
+import dataclasses
+import gzip
 import itertools
 import json
 import warnings
@@ -30,34 +32,129 @@ from pursuit_bench.conditions import CONDITIONS
 BASELINES = ("always_chase", "always_stalk")
 CONFIDENCE = 0.95
 RESAMPLES = 2000
-#: Learning curves are means over this many blocks of episodes.
-CURVE_BLOCKS = 40
 
 
 @dataclass
 class RunResult:
-    """One run folder of a sweep: what it is and what it measured."""
+    """One run of a sweep: what it is and what it measured, from its folder or from the
+    sweep's compact results (:func:`export`)."""
 
     name: str
-    folder: Path
     condition: str
     kind: str
     seed: int
     evaluation: dict[str, Any]
+    """The final evaluation (``eval.json``)."""
+    milestones: dict[int, dict[str, Any]]
+    """Evaluations of kept checkpoints (``eval-epN.json``) by episode count."""
+    curve: dict[str, list[float]] | None
+    """The learning curve in :data:`CURVE_POINTS` blocks of episodes: ``episodes`` (block
+    ends) and the block means of every agent's return, ``captured`` and ``length``."""
+    config: dict[str, Any]
+    """The run's training configuration."""
 
 
-def collect(sweep: Path) -> list[RunResult]:
-    """Every evaluated run folder under ``sweep/runs``; ValueError if there is none."""
-    results = []
-    for eval_json in sorted((sweep / "runs").glob("*/eval.json")):
-        folder = eval_json.parent
-        config = json.loads((folder / "config.json").read_text())["train"]
-        evaluation = json.loads(eval_json.read_text())
-        results.append(
-            RunResult(folder.name, folder, config["condition"], config["predator"], int(config["seed"]), evaluation)
-        )
+#: Blocks a learning curve is kept in (1 % of training each).
+CURVE_POINTS = 100
+RESULTS_FORMAT = "pursuit-bench-results-1"
+
+
+def block_curve(rows: list[dict[str, Any]], points: int = CURVE_POINTS) -> dict[str, list[float]] | None:
+    """A metrics file's rows in ``points`` equal blocks of episodes (one episode each for a run
+    shorter than that): their means; None for a run with no episode."""
+    if not rows:
+        return None
+    points = min(points, len(rows))
+    edges = np.linspace(0, len(rows), points + 1).astype(int)
+    columns = [c for c in rows[0] if c.startswith("return/")] + ["captured", "length"]
+    curve = {"episodes": edges[1:].tolist()}
+    for column in columns:
+        values = np.array([float(row[column]) for row in rows])
+        curve[column] = [round(float(values[lo:hi].mean()), 5) for lo, hi in itertools.pairwise(edges)]
+    return curve
+
+
+def _from_folder(folder: Path) -> RunResult:
+    config = json.loads((folder / "config.json").read_text())["train"]
+    milestones = {}
+    for path in folder.glob("eval-ep*.json"):
+        milestones[int(path.stem.removeprefix("eval-ep"))] = json.loads(path.read_text())
+    metrics = folder / "metrics.jsonl"
+    rows = [json.loads(line) for line in metrics.read_text().splitlines()] if metrics.exists() else []
+    return RunResult(
+        folder.name,
+        config["condition"],
+        config["predator"],
+        int(config["seed"]),
+        json.loads((folder / "eval.json").read_text()),
+        dict(sorted(milestones.items())),
+        block_curve(rows),
+        config,
+    )
+
+
+def collect(where: Path) -> list[RunResult]:
+    """Every evaluated run of a sweep folder (``runs/*/eval.json``) or of a compact results
+    folder (:func:`export`); ValueError if there is none."""
+    if (where / "results.json").is_file():
+        return load_results(where)
+    results = [_from_folder(eval_json.parent) for eval_json in sorted((where / "runs").glob("*/eval.json"))]
     if not results:
-        raise ValueError(f"{sweep}: no evaluated run folder (runs/*/eval.json); run the sweep first")
+        raise ValueError(
+            f"{where}: no evaluated run folder (runs/*/eval.json) and no results.json; run the sweep first"
+        )
+    return results
+
+
+def export(results: list[RunResult], out: Path, about: dict[str, Any]) -> int:
+    """Write a sweep's results compactly into ``out``: ``results.json`` (``about``: the plan, the
+    command) and ``runs/<name>.json.gz`` per run (its evaluations with every episode's return,
+    prey checks, its learning curve in blocks, its configuration), enough for :func:`collect`
+    to make every table and figure again without the run folders. Returns the bytes written."""
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+
+    total = 0
+    for r in results:
+        payload = {
+            "name": r.name,
+            "condition": r.condition,
+            "kind": r.kind,
+            "seed": r.seed,
+            "config": r.config,
+            "evaluation": r.evaluation,
+            "milestones": {str(n): e for n, e in r.milestones.items()},
+            "curve": r.curve,
+        }
+        data = gzip.compress(json.dumps(payload, separators=(",", ":")).encode(), mtime=0)
+        atomic_write_bytes(out / "runs" / f"{r.name}.json.gz", data)
+        total += len(data)
+    header = {"format": RESULTS_FORMAT, **about, "runs": sorted(r.name for r in results)}
+    text = json.dumps(header, indent=2) + "\n"
+    atomic_write_text(out / "results.json", text)
+    return total + len(text)
+
+
+def load_results(where: Path) -> list[RunResult]:
+    """The runs of a results folder written by :func:`export`."""
+    header = json.loads((where / "results.json").read_text())
+    if header.get("format") != RESULTS_FORMAT:
+        raise ValueError(f"{where / 'results.json'}: not pursuit-bench results (format {RESULTS_FORMAT!r} expected)")
+    results = []
+    for name in header["runs"]:
+        data = json.loads(gzip.decompress((where / "runs" / f"{name}.json.gz").read_bytes()))
+        milestones = {int(n): e for n, e in data["milestones"].items()}
+        results.append(
+            RunResult(
+                data["name"],
+                data["condition"],
+                data["kind"],
+                data["seed"],
+                data["evaluation"],
+                milestones,
+                data["curve"],
+                data["config"],
+            )
+        )
     return results
 
 
@@ -127,7 +224,7 @@ def panel_table(results: list[RunResult]) -> list[dict[str, Any]]:
                         "ci": interval(values),
                         "seeds": [r.seed for r in runs],
                         "values": values.tolist(),
-                        "runs": [str(r.folder) for r in runs],
+                        "runs": [r.name for r in runs],
                     }
             order = [k for k in kinds if k in variants] + [b for b in BASELINES if b in variants]
             variants = {k: variants[k] for k in order}  # trained kinds first, then the baselines
@@ -167,28 +264,122 @@ def summary(table: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
-def curves(results: list[RunResult], blocks: int = CURVE_BLOCKS) -> dict[str, dict[str, Any]]:
-    """Learning curves per condition and kind: episode blocks, and for every agent's return and
-    the capture rate the mean over seeds of each block's mean, with a 95 % interval."""
+def best_or_tied(table: list[dict[str, Any]]) -> int:
+    """Panels where the hierarchical predator has the highest mean of it and the two baselines,
+    or its interval overlaps the best one's (statistically tied with the best)."""
+    count = 0
+    for entry in table:
+        v = entry["variants"]
+        if "hierarchical" not in v or not all(b in v for b in BASELINES):
+            continue
+        top = max(("hierarchical", *BASELINES), key=lambda k: v[k]["mean"])
+        ours, theirs = v["hierarchical"]["ci"], v[top]["ci"]
+        if top == "hierarchical" or (ours is not None and theirs is not None and ours[1] >= theirs[0]):
+            count += 1
+    return count
+
+
+def by_budget(results: list[RunResult]) -> dict[int, list[RunResult]]:
+    """The hierarchical runs as evaluated at each training budget (episodes): every kept
+    checkpoint's evaluation and the final one, each a complete Fig. 2 of its own."""
+    budgets: dict[int, list[RunResult]] = {}
+    for r in results:
+        if r.kind != "hierarchical":
+            continue
+        final = int(r.evaluation.get("trained_episodes") or r.config["episodes"])
+        for episodes, evaluation in [*r.milestones.items(), (final, r.evaluation)]:
+            budgets.setdefault(episodes, []).append(dataclasses.replace(r, evaluation=evaluation, milestones={}))
+    return dict(sorted(budgets.items()))
+
+
+def budget_table(results: list[RunResult]) -> list[dict[str, Any]]:
+    """Per training budget: panels judged, where the hierarchical predator is best, best or
+    tied with the best, its interval above both baselines', and its mean ratio to the best."""
+    rows = []
+    for episodes, evaluated in by_budget(results).items():
+        table = panel_table(evaluated)
+        totals = summary(table)
+        rows.append(
+            {
+                "episodes": episodes,
+                "runs": len(evaluated),
+                **{k: totals[k] for k in ("panels", "hierarchical_best", "hierarchical_interval_above_both")},
+                "hierarchical_best_or_tied": best_or_tied(table),
+                "mean_ratio_to_best": mean_ratio_to_best(table),
+            }
+        )
+    return rows
+
+
+def mean_ratio_to_best(table: list[dict[str, Any]]) -> float | None:
+    """The hierarchical predator's mean return over the best variant's, averaged over panels
+    where both are positive (1 where it is the best)."""
+    ratios = []
+    for entry in table:
+        v = entry["variants"]
+        if "hierarchical" not in v or not all(b in v for b in BASELINES):
+            continue
+        top = max(v[k]["mean"] for k in ("hierarchical", *BASELINES))
+        if top > 0 and v["hierarchical"]["mean"] > 0:
+            ratios.append(v["hierarchical"]["mean"] / top)
+    return float(np.mean(ratios)) if ratios else None
+
+
+def convergence(results: list[RunResult]) -> list[dict[str, Any]]:
+    """Per condition and kind, for the predators' return (mean over predators), the prey's
+    return and the capture rate: the mean over seeds of the last 10 % of training and of the
+    10 % before, the seeds' 95 % interval of the last, and whether the change lies inside that
+    interval's half-width (the curve has stopped moving by more than the seeds disagree)."""
+    rows = []
+    for condition in [c for c in CONDITIONS if any(r.condition == c for r in results)]:
+        names = CONDITIONS[condition].agent_names
+        for kind in sorted({r.kind for r in results if r.condition == condition}):
+            runs = [r for r in results if r.condition == condition and r.kind == kind and r.curve is not None]
+            if not runs:
+                continue
+            row: dict[str, Any] = {"condition": condition, "kind": kind, "seeds": len(runs)}
+            for label in ("predators", "prey", "capture_rate"):
+                per_seed = []
+                for r in runs:
+                    curve = r.curve or {}
+                    if label == "predators":
+                        series = np.mean([curve[f"return/{a}"] for a in names[:-1]], axis=0)
+                    elif label == "prey":
+                        series = np.asarray(curve[f"return/{names[-1]}"])
+                    else:
+                        series = np.asarray(curve["captured"])
+                    tenth = max(len(series) // 10, 1)
+                    per_seed.append((series[-tenth:].mean(), series[-2 * tenth : -tenth].mean()))
+                last, before = (np.array(v) for v in zip(*per_seed, strict=True))
+                ci = interval(last)
+                half = (ci[1] - ci[0]) / 2 if ci is not None else None
+                change = float(last.mean() - before.mean())
+                row[label] = {
+                    "last": float(last.mean()),
+                    "before": float(before.mean()),
+                    "change": change,
+                    "interval": ci,
+                    "converged": bool(half is not None and abs(change) <= half),
+                }
+            rows.append(row)
+    return rows
+
+
+def curves(results: list[RunResult]) -> dict[str, dict[str, Any]]:
+    """Learning curves per condition and kind, from each run's curve in blocks: for every
+    agent's return and the capture rate, the mean over seeds of each block, with a 95 %
+    interval."""
     out: dict[str, dict[str, Any]] = {}
     for condition in [c for c in CONDITIONS if any(r.condition == c for r in results)]:
         names = CONDITIONS[condition].agent_names
         for kind in sorted({r.kind for r in results if r.condition == condition}):
-            runs = [r for r in results if r.condition == condition and r.kind == kind]
-            rows = [[json.loads(line) for line in (r.folder / "metrics.jsonl").read_text().splitlines()] for r in runs]
-            length = min(len(r) for r in rows)
-            if length < blocks:
+            runs = [r for r in results if r.condition == condition and r.kind == kind and r.curve is not None]
+            if not runs:
                 continue
-            edges = np.linspace(0, length, blocks + 1).astype(int)
             series: dict[str, Any] = {}
             columns = [(f"return/{a}", f"return/{a}") for a in names] + [("captured", "capture_rate")]
             for column, label in columns:
-                per_run = np.array(
-                    [
-                        [np.mean([float(row[column]) for row in run[lo:hi]]) for lo, hi in itertools.pairwise(edges)]
-                        for run in rows
-                    ]
-                )  # (seeds, blocks)
+                per_run = np.array([r.curve[column] for r in runs])  # type: ignore[index]  # (seeds, blocks)
                 entry: dict[str, Any] = {"mean": per_run.mean(axis=0).tolist(), "ci": None}
                 if len(runs) > 1:
                     result = stats.bootstrap(
@@ -203,8 +394,10 @@ def curves(results: list[RunResult], blocks: int = CURVE_BLOCKS) -> dict[str, di
                     low, high = result.confidence_interval
                     entry["ci"] = [np.nan_to_num(low, nan=0).tolist(), np.nan_to_num(high, nan=0).tolist()]
                 series[label] = entry
+            ends = np.array(runs[0].curve["episodes"])  # type: ignore[index]
+            starts = np.concatenate([[0], ends[:-1]])
             out.setdefault(condition, {})[kind] = {
-                "episodes": ((edges[:-1] + edges[1:]) / 2).tolist(),
+                "episodes": ((starts + ends) / 2).tolist(),
                 "seeds": len(runs),
                 "series": series,
             }
@@ -250,3 +443,78 @@ def markdown(table: list[dict[str, Any]], totals: dict[str, Any], sweep: Path) -
         lines.append("| " + " | ".join(row) + " |")
     lines += ["", "Each value's runs are listed in report.json (`variants.<name>.runs`)."]
     return "\n".join(lines) + "\n"
+
+
+def budget_markdown(rows: list[dict[str, Any]]) -> str:
+    """The panel count against budget as a markdown table (REPRODUCTION.md quotes it)."""
+    lines = [
+        "| episodes per run | runs | panels | hierarchical best | best or tied with the best | "
+        "interval above both baselines | mean ratio to the best |",
+        "|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        ratio = f"{r['mean_ratio_to_best']:.0%}" if r["mean_ratio_to_best"] is not None else "–"
+        lines.append(
+            f"| {r['episodes']} | {r['runs']} | {r['panels']} | {r['hierarchical_best']} | "
+            f"{r['hierarchical_best_or_tied']} | {r['hierarchical_interval_above_both']} | {ratio} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def convergence_markdown(rows: list[dict[str, Any]]) -> str:
+    """The convergence verdicts as a markdown table: per condition and kind, the change from
+    the second-last to the last tenth of training, and whether it lies within the seeds' spread."""
+
+    def cell(entry: dict[str, Any]) -> str:
+        return f"{entry['before']:+.2f} → {entry['last']:+.2f} ({'yes' if entry['converged'] else 'no'})"
+
+    lines = [
+        "| condition | kind | seeds | predators' return | prey's return | capture rate |",
+        "|---|---|---:|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['condition']} | {r['kind']} | {r['seeds']} | {cell(r['predators'])} | {cell(r['prey'])} | "
+            f"{cell(r['capture_rate'])} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def write(where: Path, out: Path | None = None) -> dict[str, Any]:
+    """Collect a sweep's evaluated runs (its folder, or its compact results) and write
+    ``report.json``, ``report.md``, ``fig2.png``, ``curves.png`` and, with kept checkpoints,
+    ``budget.png`` into ``out`` (default: ``where``). Returns the summary and the files written;
+    ValueError if there is no evaluated run."""
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.plots import budget_png, curves_png, fig2_png
+
+    out = out or where
+    results = collect(where)
+    table = panel_table(results)
+    totals = {**summary(table), "hierarchical_best_or_tied": best_or_tied(table)}
+    learning = curves(results)
+    budgets = budget_table(results)
+    converged = convergence(results)
+    payload = {
+        "sweep": str(where),
+        "summary": totals,
+        "panels": table,
+        "budgets": budgets,
+        "convergence": converged,
+        "curves": learning,
+    }
+    atomic_write_text(out / "report.json", json.dumps(payload, indent=2) + "\n")
+    text = markdown(table, totals, where)
+    text += "\n## Panels against the training budget\n\n" + budget_markdown(budgets)
+    text += "\n## Convergence (last tenth of training against the tenth before it)\n\n"
+    text += convergence_markdown(converged)
+    atomic_write_text(out / "report.md", text)
+    atomic_write_bytes(out / "fig2.png", fig2_png(table))
+    written = ["report.md", "report.json", "fig2.png"]
+    if learning:
+        atomic_write_bytes(out / "curves.png", curves_png(learning))
+        written.append("curves.png")
+    if len(budgets) > 1:
+        atomic_write_bytes(out / "budget.png", budget_png(budgets))
+        written.append("budget.png")
+    return {**totals, "written": written, "budgets": budgets}

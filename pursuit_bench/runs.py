@@ -1,4 +1,5 @@
-"""A training run's folder: what it holds and how it is written and read back.
+"""A training run's folder: what it holds and how it is written and read back. Reading its
+configuration and holding its lock import neither torch nor the physics.
 
 ``runs/NAME/`` holds ``config.json`` (the resolved configuration), ``metrics.jsonl`` (one row
 per episode), ``checkpoint.pt`` (the latest checkpoint), ``train.rrd`` (the Rerun recording;
@@ -10,51 +11,28 @@ by the one process that trains or evaluates in the folder.
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import json
 import os
 import re
-from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from pursuit_bench.agents import checkpoint
-from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.files import RunBusy as RunBusy  # the lock lives in files.py: no torch, quick refusals
 from pursuit_bench.files import atomic_write_text
-from pursuit_bench.task import obs_size
-from pursuit_bench.train import TrainConfig, build_agents, load_agents_state
+from pursuit_bench.files import locked as locked
+from pursuit_bench.train_config import TrainConfig
+
+if TYPE_CHECKING:
+    from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 
 RUN_FORMAT = "pursuit-bench-run-1"
 CONFIG = "config.json"
 METRICS = "metrics.jsonl"
 CHECKPOINT = "checkpoint.pt"
-LOCK = ".lock"
+LOCK = ".lock"  # what files.locked holds
 RUN_FILES = (CONFIG, METRICS, CHECKPOINT)
 _TAG = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-
-
-class RunBusy(ValueError):
-    """Another process holds the run folder."""
-
-
-@contextlib.contextmanager
-def locked(folder: Path) -> Iterator[None]:
-    """Hold the run folder's exclusive lock (``fcntl.flock`` on ``.lock``) while the block runs;
-    :class:`RunBusy` at once if another process holds it. The lock dies with its process."""
-    fd = os.open(folder / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
-            raise RunBusy(f"{folder} is in use by another pursuit-bench process (pid {holder})") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-        yield
-    finally:
-        os.close(fd)
 
 
 def eval_paths(folder: Path, tag: str | None = None) -> dict[str, Path]:
@@ -107,12 +85,16 @@ def milestone_checkpoint(episodes: int) -> str:
 
 
 def save_checkpoint(folder: Path, state: dict[str, Any], name: str = CHECKPOINT) -> None:
+    from pursuit_bench.agents import checkpoint
+
     checkpoint.save(folder / name, {"kind": "run", **state})
 
 
 def load_checkpoint(folder: Path, name: str = CHECKPOINT) -> dict[str, Any]:
     """The run's latest checkpoint (or the one called ``name``), or ValueError (missing,
     truncated, corrupted, foreign)."""
+    from pursuit_bench.agents import checkpoint
+
     path = folder / name
     if not path.is_file():
         raise ValueError(f"{folder}: no checkpoint yet ({name} is missing)")
@@ -145,6 +127,9 @@ def load_agents(
     weights of its last checkpoint, ready for ``act(observation)`` and
     :func:`~pursuit_bench.evaluate.evaluate_agents`. ``ValueError`` if the folder holds no
     trained run. ``state``: the folder's checkpoint, if the caller has read it already."""
+    from pursuit_bench.task import obs_size
+    from pursuit_bench.train import build_agents, load_agents_state
+
     folder = Path(folder)
     config, _ = read_config(folder)
     state = state if state is not None else load_checkpoint(folder)

@@ -40,11 +40,19 @@ class SignalCatcher:
             if self.raise_at_once:
                 raise Stopped(signum)
 
+    def check(self) -> None:
+        """Raise :class:`Stopped` if a signal has arrived: a safe point of the caller's choosing."""
+        if self.signum is not None:
+            raise Stopped(self.signum)
+
     @contextlib.contextmanager
     def active(self) -> Iterator[SignalCatcher]:
+        """Catch the signals while the block runs; then the handlers it found (or those the
+        block set) are back."""
         previous = {s: signal.signal(s, self._handle) for s in STOP_SIGNALS}
         try:
             yield self
         finally:
             for s, handler in previous.items():
-                signal.signal(s, handler)
+                if signal.getsignal(s) == self._handle:  # the block may have set its own
+                    signal.signal(s, handler)

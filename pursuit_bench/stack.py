@@ -143,6 +143,7 @@ def evaluate_folder(
     record: bool = True,
     tag: str | None = None,
     checkpoint: str = runs.CHECKPOINT,
+    check: Callable[[], None] = lambda: None,
 ) -> dict[str, Any]:
     """Evaluate a trained run folder (its lock held by the caller) by the paper's protocol and
     write ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*``) into it: see
@@ -160,6 +161,7 @@ def evaluate_folder(
         seed=seed,
         num_envs=num_envs,
         record=record,
+        check=check,
     )
 
 
@@ -173,11 +175,14 @@ def evaluate_into(
     seed: int,
     num_envs: int = 64,
     record: bool = True,
+    check: Callable[[], None] = lambda: None,
 ) -> dict[str, Any]:
     """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
     (with ``about`` and the training config), its bar chart and a recording to ``paths``
     (``runs.eval_paths``) together: each is written under a temporary name and renamed when all
-    are complete, so an interruption leaves the previous ones as they were."""
+    are complete, so an interruption leaves the previous ones as they were. ``check()`` is
+    called before every step and once more before the files are put in place: an exception it
+    raises stops the evaluation with the previous files untouched."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder = None
     try:
@@ -194,12 +199,14 @@ def evaluate_into(
             recorder=recorder,
             backend=config.backend,
             predator_kind=config.predator,
+            check=check,
         )
         result.update({**about, "training": config.to_dict()})
         if recorder is not None:
             recorder.close()
-        atomic_write_bytes(partial["png"], reward_bars_png(result))
+        atomic_write_bytes(partial["png"], reward_bars_png(result, run=paths["json"].parent.name))
         atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
+        check()  # the last point at which the previous results stay as they were
         for kind in ("rrd", "png", "json"):  # eval.json last: it says the set is complete
             if partial[kind].exists():
                 os.replace(partial[kind], paths[kind])

@@ -160,21 +160,46 @@ def stacks(plan: SweepPlan, names: list[str], workers: int, max_runs: int = 16) 
     return sorted(planned, key=lambda b: -sum(cost[n] for n in b))
 
 
-def open_sweep(out: Path, plan: SweepPlan) -> None:
-    """Write the plan into ``out`` (a new sweep) or check that ``out`` holds this plan."""
+def plan_differences(saved: SweepPlan, plan: SweepPlan) -> list[str]:
+    """What differs between two plans, one ``name: saved → given`` per field (hyper-parameters
+    by their own names)."""
+    before, after = saved.to_dict(), plan.to_dict()
+    for agent in (before, after):
+        agent.update({f"agent.{k}": v for k, v in agent.pop("agent").items()})
+    return [f"{k}: {before.get(k)!r} → {after.get(k)!r}" for k in sorted(after) if before.get(k) != after.get(k)]
+
+
+def open_sweep(out: Path, plan: SweepPlan) -> str | None:
+    """Write the plan into ``out`` (a new sweep) or check that ``out`` holds this plan. A plan
+    that differs only by more ``episodes`` extends the sweep (its runs train on from their
+    checkpoints; returns a note saying so); any other difference is a ValueError naming it."""
     path = out / PLAN
     if path.exists():
         try:
-            saved = json.loads(path.read_text())
-            same = saved.get("format") == SWEEP_FORMAT and SweepPlan.from_dict(saved["plan"]) == plan
+            saved_payload = json.loads(path.read_text())
+            if saved_payload.get("format") != SWEEP_FORMAT:
+                raise ValueError(f"format {saved_payload.get('format')!r}")
+            saved = SweepPlan.from_dict(saved_payload["plan"])
         except (ValueError, KeyError, TypeError) as error:
             raise ValueError(f"{path}: not a pursuit-bench sweep plan ({error})") from None
-        if not same:
-            raise ValueError(f"{out} holds a sweep with another plan ({path}); give another --out")
-        return
+        if saved == plan:
+            return None
+        differences = plan_differences(saved, plan)
+        if dataclasses.replace(saved, episodes=plan.episodes) == plan and plan.episodes > saved.episodes:
+            _write_plan(path, plan)
+            return f"extending the sweep from {saved.episodes} to {plan.episodes} episodes a run"
+        raise ValueError(
+            f"{out} holds a sweep with another plan ({'; '.join(differences)}); give the same options, "
+            "a larger --episodes to extend it, or another --out"
+        )
     if out.exists() and any(out.iterdir()):
         raise ValueError(f"{out}: the folder is not empty and holds no sweep; choose another --out")
     out.mkdir(parents=True, exist_ok=True)
+    _write_plan(path, plan)
+    return None
+
+
+def _write_plan(path: Path, plan: SweepPlan) -> None:
     payload = {"format": SWEEP_FORMAT, "plan": plan.to_dict(), "runs": sorted(plan.runs())}
     atomic_write_text(path, json.dumps(payload, indent=2) + "\n")
 
@@ -192,15 +217,27 @@ def run_status(folder: Path, config: TrainConfig, keep: tuple[int, ...] = ()) ->
     except ValueError:
         return 0, False
     evaluations = ["eval.json", *(runs.eval_paths(folder, milestone_tag(n))["json"].name for n in keep)]
-    return done, done >= config.episodes and all((folder / name).exists() for name in evaluations)
+    return done, done >= config.episodes and all((folder / name).exists() for name in evaluations) and (
+        _evaluated_at(folder) == done
+    )
+
+
+def _evaluated_at(folder: Path) -> int | None:
+    """The episode count of the checkpoint ``eval.json`` evaluated (None without one)."""
+    try:
+        return int(json.loads((folder / "eval.json").read_text())["trained_episodes"])
+    except (FileNotFoundError, ValueError, KeyError, TypeError):
+        return None
 
 
 def _prepare(folder: Path, name: str, config: TrainConfig, plan: SweepPlan) -> dict[str, Any] | None:
     """Make ``folder`` hold run ``name`` (its lock held); the checkpoint to resume from, or None."""
     folder.mkdir(parents=True, exist_ok=True)
     if runs.is_run(folder) and (folder / runs.CHECKPOINT).exists():
-        saved, _ = runs.read_config(folder)
-        if saved != config:
+        saved, settings = runs.read_config(folder)
+        if saved != config and dataclasses.replace(saved, episodes=config.episodes) == config:
+            runs.write_config(folder, config, settings)  # the sweep was extended: train on to its target
+        elif saved != config:
             raise ValueError(f"{folder} holds a run with another configuration than the sweep's {name}")
         return runs.load_checkpoint(folder)
     runs.clear(folder)
@@ -215,7 +252,7 @@ def _prepare(folder: Path, name: str, config: TrainConfig, plan: SweepPlan) -> d
     return None
 
 
-def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -> None:
+def run_stack(out: Path, names: list[str], messages: Any, record: bool = True, threads: int = 1) -> None:
     """A worker's task: train the runs ``names`` of the sweep in ``out`` as one stack, then
     evaluate each. Sends ``("episode", name, n)`` as episodes finish and ``("done", name,
     None)`` when a run is trained and evaluated into ``messages``. Stops, checkpointing, on
@@ -225,7 +262,7 @@ def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -
     from pursuit_bench.signals import SignalCatcher
     from pursuit_bench.stack import FolderRun, evaluate_folder, train_stack
 
-    torch.set_num_threads(1)
+    torch.set_num_threads(threads)
     plan = SweepPlan.from_dict(json.loads((out / PLAN).read_text())["plan"])
     configs = plan.runs()
     parent = os.getppid()
@@ -260,7 +297,7 @@ def run_stack(out: Path, names: list[str], messages: Any, record: bool = True) -
                 break
             done, evaluated = run_status(folders[name], configs[name], plan.keep_checkpoints)
             if done >= configs[name].episodes and not evaluated:
-                if not (folders[name] / "eval.json").exists():
+                if _evaluated_at(folders[name]) != done:
                     evaluate_folder(folders[name], episodes=plan.eval_episodes, seed=EVAL_SEED, record=False)
                 for n in plan.keep_checkpoints:
                     tag = milestone_tag(n)
@@ -283,6 +320,7 @@ def run_sweep(
     *,
     workers: int,
     record: bool = True,
+    threads: int = 1,
     executor: str = "local",
     address: str | None = None,
     on_message: Callable[[str, str, Any], None] = lambda kind, name, value: None,
@@ -291,8 +329,9 @@ def run_sweep(
     """Run the sweep in ``out`` (written or checked by :func:`open_sweep`): its unfinished runs,
     in stacks, on ``workers`` local processes (``executor="local"``) or as Ray tasks
     (``"ray"``, on the cluster at ``address`` or a local instance of ``workers`` CPUs).
-    ``on_message`` hears the workers' messages; when ``should_stop()`` turns true the workers
-    are stopped (local ones checkpoint first). Returns whether every run is done."""
+    Each stack trains on ``threads`` torch threads. ``on_message`` hears the workers'
+    messages; when ``should_stop()`` turns true the workers are stopped (local ones checkpoint
+    first). Returns whether every run is done."""
     configs = plan.runs()
     todo = [
         name
@@ -301,11 +340,9 @@ def run_sweep(
     ]
     tasks = stacks(plan, todo, workers)
     if executor == "ray":
-        _run_on_ray(
-            out, tasks, workers=workers, address=address, record=record, on_message=on_message, should_stop=should_stop
-        )
+        _run_on_ray(out, tasks, workers, address, record, on_message, should_stop, threads)
     elif executor == "local":
-        _run_locally(out, tasks, workers=workers, record=record, on_message=on_message, should_stop=should_stop)
+        _run_locally(out, tasks, workers, record, on_message, should_stop, threads)
     else:
         raise ValueError(f"executor={executor!r}: expected 'local' or 'ray'")
     return all(run_status(out / "runs" / name, config, plan.keep_checkpoints)[1] for name, config in configs.items())
@@ -318,6 +355,7 @@ def _run_locally(
     record: bool,
     on_message: Callable[[str, str, Any], None],
     should_stop: Callable[[], bool],
+    threads: int = 1,
 ) -> None:
     context = multiprocessing.get_context("spawn")
     messages = context.Queue()
@@ -330,7 +368,9 @@ def _run_locally(
             for process in running:
                 process.terminate()  # SIGTERM: the worker checkpoints its stack and ends
         while tasks and len(running) < workers:
-            process = context.Process(target=run_stack, args=(out, tasks.pop(0), messages, record), daemon=False)
+            process = context.Process(
+                target=run_stack, args=(out, tasks.pop(0), messages, record, threads), daemon=False
+            )
             process.start()
             running.append(process)
         try:
@@ -356,7 +396,9 @@ class _Messages(list):
         self.append(message)
 
 
-def stack_task(plan_json: str, names: list[str], files: dict[str, dict[str, bytes]], record: bool) -> dict[str, Any]:
+def stack_task(
+    plan_json: str, names: list[str], files: dict[str, dict[str, bytes]], record: bool, threads: int = 1
+) -> dict[str, Any]:
     """One stack as a self-contained task, for a machine that does not share our file system:
     the sweep's plan and the runs' current files come in, the runs' files and the messages go
     out. (Ray runs it; it needs nothing of Ray.)"""
@@ -368,7 +410,7 @@ def stack_task(plan_json: str, names: list[str], files: dict[str, dict[str, byte
                 (out / "runs" / name).mkdir(parents=True, exist_ok=True)
                 (out / "runs" / name / file_name).write_bytes(data)
         messages = _Messages()
-        run_stack(out, names, messages, record)
+        run_stack(out, names, messages, record, threads)
         return {"files": {name: _files(out / "runs" / name) for name in names}, "messages": list(messages)}
 
 
@@ -387,8 +429,9 @@ def _run_on_ray(
     record: bool,
     on_message: Callable[[str, str, Any], None],
     should_stop: Callable[[], bool],
+    threads: int = 1,
 ) -> None:
-    """Every stack a Ray task (one CPU: a stack trains on one thread), retried if its node is
+    """Every stack a Ray task (``threads`` CPUs: a stack trains on that many torch threads), retried if its node is
     lost; the driver writes what each returns into ``out``, run folder by run folder."""
     try:
         import ray
@@ -399,10 +442,10 @@ def _run_on_ray(
     else:
         ray.init(address=address, log_to_driver=False)
     try:
-        remote = ray.remote(num_cpus=1, max_retries=3, retry_exceptions=False)(stack_task)
+        remote = ray.remote(num_cpus=threads, max_retries=3, retry_exceptions=False)(stack_task)
         plan_json = (out / PLAN).read_text()
         pending = {
-            remote.remote(plan_json, names, {n: _files(out / "runs" / n) for n in names}, record): names
+            remote.remote(plan_json, names, {n: _files(out / "runs" / n) for n in names}, record, threads): names
             for names in tasks
         }
         while pending:

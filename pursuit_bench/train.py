@@ -18,79 +18,20 @@ The CLI parses options into a :class:`TrainConfig` and calls :class:`Trainer`.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
 from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
-from pursuit_bench.agents.config import QUICK, AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner
 from pursuit_bench.agents.kinds import KINDS, LearningAgent, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.recording import EpisodeTraces, Recorder
+from pursuit_bench.train_config import TrainConfig as TrainConfig  # the configuration lives apart: no torch there
 from pursuit_bench.vector import VectorPursuitEnv, put_actions
-from pursuit_bench.world import Backend
-
-PredatorKind = Literal["hierarchical", "flat", "always_chase", "always_stalk"]
-PreyKind = Literal["learning", "scripted"]
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """One training run."""
-
-    condition: str = "1p-high"
-    """One of the paper's ten conditions (``pursuit_bench.CONDITIONS``)."""
-    agent: AgentConfig = QUICK
-    """Hyper-parameters shared by every learner (each has its own copy of the state)."""
-    episodes: int = QUICK.episodes
-    """Episodes to train for, counted over all arenas."""
-    num_envs: int = 8
-    """Arenas stepped together. Every arena-step is one transition for every agent."""
-    seed: int = 0
-    """Seeds the arenas, and with each agent's index its network's initialisation, its
-    exploration and its replay sampling."""
-    predator: PredatorKind = "hierarchical"
-    """What the predators are: the paper's hierarchical agent, the flat ablation, or a scripted
-    baseline (which does not learn)."""
-    prey: PreyKind = "learning"
-    """A learning prey (the paper) or the scripted fleeing prey."""
-    batched_learners: bool = True
-    """Stack the predators' learners into one batched computation, and with other runs' (the
-    same results as separate updates, faster); False updates them one by one."""
-    backend: Backend = "pymunk"
-    """Physics backend of the arenas."""
-
-    def __post_init__(self) -> None:
-        if self.condition not in CONDITIONS:
-            raise ValueError(f"condition={self.condition!r}: expected one of {', '.join(CONDITIONS)}")
-        for name in ("episodes", "num_envs"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"{name}={value!r}: expected an integer >= 1")
-        if self.predator not in ("hierarchical", "flat", "always_chase", "always_stalk"):
-            raise ValueError(
-                f"predator={self.predator!r}: expected 'hierarchical', 'flat', 'always_chase' or 'always_stalk'"
-            )
-        if self.prey not in ("learning", "scripted"):
-            raise ValueError(f"prey={self.prey!r}: expected 'learning' or 'scripted'")
-
-    def to_dict(self) -> dict[str, Any]:
-        return {**dataclasses.asdict(self), "agent": self.agent.to_dict()}
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
-        """The inverse of :meth:`to_dict`; unknown keys are a ValueError."""
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(data) - names)
-        if unknown:
-            raise ValueError(f"unknown training option(s) {unknown}")
-        agent = AgentConfig().replace(**data.get("agent", {}))
-        return cls(**{**data, "agent": agent})
 
 
 def member_seed(run_seed: int, agent: int) -> int:

@@ -28,13 +28,14 @@ step outside its arena: a disk that touches or crosses a wall is put back touchi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import Protocol
 
 import numba
 import numpy as np
 import pymunk
 import pymunk.batch
 
+from pursuit_bench.conditions import Backend as Backend  # physics backends: named with the task's options
 from pursuit_bench.conditions import WallRule
 
 #: Time step in seconds (paper 3.1).
@@ -60,7 +61,6 @@ CONTACT_TOLERANCE = 1e-9
 HASH_CELL = 0.75
 HASH_BUCKETS_PER_SHAPE = 10
 
-Backend = Literal["pymunk", "numpy"]
 _POSITION_VELOCITY = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
 
 

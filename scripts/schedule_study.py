@@ -31,9 +31,10 @@ from pursuit_bench.agents.config import REPRODUCTION
 from pursuit_bench.evaluate import evaluate_agents
 from pursuit_bench.train import TrainConfig, Trainer
 
-#: name -> (changes to the reproduction preset, arenas per run); one hypothesis per step away
-#: from the reproduction preset (replay ratio alone, then the step size with it, then arenas).
-VARIANTS: dict[str, tuple[dict[str, Any], int]] = {
+#: name -> (changes to the reproduction preset, arenas per run[, episodes]); one hypothesis per
+#: step away from the reproduction preset (replay ratio alone, then the step size with it, then
+#: arenas); the cheapest also trained for longer (the same CPU time buys them more episodes).
+VARIANTS: dict[str, tuple[Any, ...]] = {
     "reproduction": ({}, 8),
     "ratio1/4": ({"replay_ratio": 0.25}, 8),
     "ratio1/8": ({"replay_ratio": 0.125}, 8),
@@ -41,6 +42,8 @@ VARIANTS: dict[str, tuple[dict[str, Any], int]] = {
     "ratio1/8-lr1e-4": ({"replay_ratio": 0.125, "learning_rate": 1e-4}, 8),
     "ratio1/8-lr1e-4-b128": ({"replay_ratio": 0.125, "learning_rate": 1e-4, "batch_size": 128}, 8),
     "ratio1/32-lr1e-4-32arenas": ({"replay_ratio": 1 / 32, "learning_rate": 1e-4}, 32),
+    "ratio1/8-lr1e-4, 6000 episodes": ({"replay_ratio": 0.125, "learning_rate": 1e-4}, 8, 6000),
+    "ratio1/32-lr1e-4-32arenas, 6000 episodes": ({"replay_ratio": 1 / 32, "learning_rate": 1e-4}, 32, 6000),
 }
 CONDITIONS = ("1p-high", "2p-high-shared", "1p-low")
 EVAL_SEED = 54321
@@ -63,7 +66,9 @@ def quality(result: dict[str, Any]) -> dict[str, float]:
 def run_variant(
     out: Path, name: str, condition: str, seeds: int, episodes: int, every: int, eval_episodes: int
 ) -> None:
-    changes, arenas = VARIANTS[name]
+    changes, arenas, *longer = VARIANTS[name]
+    episodes = longer[0] if longer else episodes
+    every = every * episodes // 1500 if longer else every
     agent = REPRODUCTION.replace(**changes)
     configs = [
         TrainConfig(condition=condition, agent=agent, episodes=episodes, num_envs=arenas, seed=s) for s in range(seeds)

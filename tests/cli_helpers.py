@@ -1,8 +1,8 @@
 """Running the command line in tests: in-process through click's runner, or as a real process."""
 
-import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from click.testing import CliRunner
@@ -16,14 +16,27 @@ def run_cli(*args: str) -> tuple[int, str]:
     return result.exit_code, result.output
 
 
-def cli_process(*args: str) -> subprocess.Popen:
-    """``pursuit-bench ARGS`` as a process of its own (for signals and kills)."""
-    command = [sys.executable, "-m", "pursuit_bench.cli.main", *args]
-    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def cli_command(*args: str) -> list[str]:
+    """The command line of ``pursuit-bench ARGS`` as a process of its own."""
+    return [sys.executable, "-m", "pursuit_bench.cli.main", *args]
+
+
+def wait_until(condition: Callable[[], bool], what: str, timeout: float = 120.0) -> None:
+    """Poll ``condition`` until it holds (a failure after ``timeout`` seconds): tests wait for
+    what they need to see, never for a fixed time."""
+    start = time.monotonic()
+    while not condition():
+        assert time.monotonic() - start < timeout, f"{what}: not seen within {timeout:.0f} s"
+        time.sleep(0.05)
 
 
 def wait_for(path: Path, timeout: float = 120.0) -> None:
-    start = time.monotonic()
-    while not path.exists():
-        assert time.monotonic() - start < timeout, f"{path} never appeared"
-        time.sleep(0.05)
+    wait_until(path.exists, f"{path}", timeout)
+
+
+def lines(path: Path) -> int:
+    """Complete lines in a file (0 if it is not there yet)."""
+    try:
+        return path.read_text().count("\n")
+    except FileNotFoundError:
+        return 0

@@ -4,11 +4,10 @@ import json
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
-from cli_helpers import cli_process, run_cli, wait_for
+from cli_helpers import cli_command, lines, run_cli, wait_for, wait_until
 
 TINY = [
     "--episodes",
@@ -71,7 +70,9 @@ def test_same_seed_same_eval(tmp_path: Path) -> None:
     ("args", "message"),
     [
         (["train", "--condition", "4p-low"], "'4p-low' is not one of"),
-        (["train", "--episodes", "0"], "0 is not in the range x>=1"),
+        (["train", "--episodes", "0"], "0 is not in the range 1<=x<=100000000"),
+        (["train", "--episodes", "10000000000000"], "is not in the range 1<=x<=100000000"),
+        (["train", "--no-record", "--record-every", "5"], "--record-every goes with recording"),
         (["train", "--gamma", "1.5"], "gamma=1.5"),
         (["eval", "nowhere"], "nowhere: no such run folder"),
         (["view", "missing.rrd"], "missing.rrd: no such recording"),
@@ -124,11 +125,11 @@ def test_bad_run_folders(tmp_path: Path) -> None:
     assert json.loads((out / "config.json").read_text())["train"]["condition"] == "1p-low"
 
 
-def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path) -> None:
+def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
     args = ["train", "--condition", "1p-low", "--out", str(out), "--episodes", "400", "--num-envs", "4"]
     args += ["--learning-starts", "32", "--batch-size", "16", "--checkpoint-every", "20"]
-    process = cli_process(*args)
+    process = processes(cli_command(*args))
     wait_for(out / "checkpoint.pt")
     process.send_signal(signal.SIGKILL)
     process.wait()
@@ -142,13 +143,12 @@ def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path) -> No
     assert (out / "train.resume1.rrd").exists()
 
 
-def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: Path) -> None:
+def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
-    process = cli_process(
-        "train", "--condition", "1p-low", "--out", str(out), "--episodes", "100000", "--record-every", "1"
+    process = processes(
+        cli_command("train", "--condition", "1p-low", "--out", str(out), "--episodes", "100000", "--record-every", "1")
     )
-    wait_for(out / "metrics.jsonl")
-    time.sleep(3.0)
+    wait_until(lambda: lines(out / "metrics.jsonl") >= 20, "20 episodes trained")
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 130, stderr

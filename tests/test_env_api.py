@@ -182,3 +182,14 @@ def test_single_agent_view_uses_given_opponents() -> None:
         gymnasium.make("pursuit_bench/Pursuit-v0", agent="wolf")
     with pytest.raises(ValueError, match="opponents"):
         gymnasium.make("pursuit_bench/Pursuit-v0", agent="prey_0", opponents={"prey_0": FleeingPrey()})
+
+
+def test_every_module_the_readme_names_is_an_attribute_of_the_package() -> None:
+    code = (
+        "import pursuit_bench as p; "
+        "assert 'seed' in next(iter(p.pretrained.info('1p-high').values())); "
+        "assert callable(p.navigation.parallel_navigation) and callable(p.evaluate.evaluate_agents); "
+        "assert p.policies.FleeingPrey"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr

@@ -50,7 +50,7 @@ def test_each_file_says_how_it_was_trained(trained: Path, tmp_path: Path) -> Non
     headers = pretrained.info("2p-low-individual", folder=tmp_path)
     header = headers["predator_1"]
     assert header["agent"] == "predator_1" and header["kind"] == "hierarchical"
-    assert header["seed"] == "3" and header["trained_episodes"] == "8"
+    assert header["seed"] == 3 and header["trained_episodes"] == 8  # numbers, not strings
     assert header["sweep_command"] == "by a test" and header["version"]
     assert header["training"]["agent"]["wall_features"] is True
     # the header is plain JSON at the start of the file: readable without this package

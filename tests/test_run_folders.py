@@ -1,5 +1,6 @@
 """Run folders under failure: bad input, signals, a second process, resuming, recordings."""
 
+import functools
 import json
 import signal
 import subprocess
@@ -10,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import rerun.chunk as rc
-from cli_helpers import cli_process, run_cli, wait_for
+from cli_helpers import cli_command, lines, run_cli, wait_for, wait_until
 
 import pursuit_bench
 from pursuit_bench import runs
@@ -94,11 +95,10 @@ def test_resume_alone_takes_the_saved_configuration(tmp_path: Path) -> None:
     assert len(recording_ids(pieces[0]) | recording_ids(pieces[1])) == 1  # one recording in two files
 
 
-def test_sigterm_during_training_checkpoints_and_exits_143(tmp_path: Path) -> None:
+def test_sigterm_during_training_checkpoints_and_exits_143(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
-    process = cli_process("train", "--condition", "1p-low", "--out", str(out), "--episodes", "100000")
-    wait_for(out / "metrics.jsonl")
-    time.sleep(2.0)
+    process = processes(cli_command("train", "--condition", "1p-low", "--out", str(out), "--episodes", "100000"))
+    wait_until(lambda: lines(out / "metrics.jsonl") >= 20, "20 episodes trained")
     process.send_signal(signal.SIGTERM)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 143, stderr
@@ -126,16 +126,15 @@ def test_a_second_process_cannot_use_a_busy_folder(tmp_path: Path) -> None:
     assert code == 0, output  # released
 
 
-def test_interrupted_eval_keeps_the_previous_results_and_tags_keep_apart(tmp_path: Path) -> None:
+def test_interrupted_eval_keeps_the_previous_results_and_tags_keep_apart(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
     train_tiny(out, "--no-record")
     code, output = run_cli("eval", str(out), "--episodes", "6", "--num-envs", "3")
     assert code == 0, output
     before = {name: (out / name).read_bytes() for name in ("eval.json", "eval.png", "eval.rrd")}
 
-    process = cli_process("eval", str(out), "--episodes", "1000000")
+    process = processes(cli_command("eval", str(out), "--episodes", "1000000"))
     wait_for(out / ".eval.rrd.tmp")
-    time.sleep(1.0)
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 130, stderr
@@ -224,3 +223,33 @@ def test_the_cli_starts_without_torch_or_rerun(command: list[str]) -> None:
     code += "print(sorted({'torch', 'rerun'} & set(sys.modules)))"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.stdout.strip().splitlines()[-1] == "[]", result.stdout + result.stderr
+
+
+def test_sigterm_at_any_moment_of_eval_leaves_old_files_or_complete_new_ones(tmp_path: Path, processes) -> None:
+    """SIGTERM sent at many moments of an evaluation, whatever call it lands in (Rerun's
+    included): either exit 143 with the previous files untouched, or exit 0 with a complete new
+    set; never anything between, never a process left running."""
+    out = tmp_path / "run"
+    train_tiny(out)
+    code, output = run_cli("eval", str(out), "--episodes", "6", "--num-envs", "3")
+    assert code == 0, output
+    before = {name: (out / name).read_bytes() for name in ("eval.json", "eval.png", "eval.rrd")}
+    outcomes = set()
+    for delay in (0.0, 0.05, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2):  # moments to land on; the assertions hold for any
+        process = processes(cli_command("eval", str(out), "--episodes", "40", "--num-envs", "4", "--seed", "3"))
+        under_way = functools.partial(lambda p: p.poll() is not None or (out / ".eval.rrd.tmp").exists(), process)
+        wait_until(under_way, "the evaluation under way")
+        time.sleep(delay)
+        process.send_signal(signal.SIGTERM)
+        _, stderr = process.communicate(timeout=120)
+        outcomes.add(process.returncode)
+        assert process.returncode in (0, 143), stderr
+        assert not list(out.glob(".*.tmp")), stderr
+        now = {name: (out / name).read_bytes() for name in before}
+        if process.returncode == 143:
+            assert now == before and "keeps its previous results" in stderr
+        else:
+            result = json.loads(now["eval.json"])
+            assert result["seed"] == 3 and result["episodes"] == 40
+            before = now
+    assert 143 in outcomes

@@ -5,11 +5,10 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
-from cli_helpers import run_cli
+from cli_helpers import lines, run_cli, wait_until
 
 from pursuit_bench import runs
 from pursuit_bench.conditions import CONDITIONS
@@ -71,7 +70,7 @@ def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alon
         for baseline in ("always_chase", "always_stalk"):
             poi = panel["improvement"][baseline]
             assert 0.0 <= poi["ci"][0] <= poi["value"] <= poi["ci"][1] <= 1.0
-        seed0 = json.loads(Path(panel["variants"]["hierarchical"]["runs"][0], "eval.json").read_text())
+        seed0 = json.loads((out / "runs" / panel["variants"]["hierarchical"]["runs"][0] / "eval.json").read_text())
         index = int(panel["predator"][-1])
         assert seed0["panels"][index]["trained"] == panel["variants"]["hierarchical"]["values"][0]
     assert report["summary"]["panels"] == 3 and "hierarchical best" in (out / "report.md").read_text().lower()
@@ -83,15 +82,12 @@ def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alon
     assert all(len(a["p_chase"]) == 20 for a in analysis.values()) and (out / "modes.png").stat().st_size > 10_000
 
 
-def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path) -> None:
+def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path, processes) -> None:
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "pursuit_bench.cli.main", *SWEEP, "--episodes", "120", "--out", str(out)]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
-    start = time.monotonic()
-    while not list(out.glob("runs/*/checkpoint.pt")):
-        assert time.monotonic() - start < 120, "no checkpoint appeared"
-        time.sleep(0.1)
-    time.sleep(1.5)  # past the checkpoint: metrics rows beyond it must not survive the resume
+    process = processes(command)
+    # past the first checkpoint (episode 10): metrics rows beyond it must not survive the resume
+    wait_until(lambda: any(lines(p) >= 14 for p in out.glob("runs/*/metrics.jsonl")), "a run past its checkpoint")
     os.killpg(process.pid, signal.SIGKILL)  # the sweep and its workers, at once
     process.wait()
     assert not all((out / "runs" / name / "eval.json").exists() for name in NAMES)
@@ -184,3 +180,22 @@ def test_kept_checkpoints_are_evaluated_like_the_final_one(tmp_path: Path) -> No
     assert early["trained_episodes"] == 8 and final["trained_episodes"] == 16
     code, output = run_cli(*command, "--workers", "1", "--keep-checkpoints", "20", "--out", str(tmp_path / "t"))
     assert code == 2 and "keep_checkpoints=[20]" in output
+
+
+def test_a_sweep_extends_to_more_episodes_and_names_what_else_differs(tmp_path: Path) -> None:
+    out = tmp_path / "s"
+    command = ["sweep", "--conditions", "1p-low", "--seeds", "1", "--eval-episodes", "6", "--workers", "1"]
+    command += ["--no-record", "--checkpoint-every", "4", "--out", str(out)]
+    code, output = run_cli(*command, "--episodes", "8")
+    assert code == 0, output
+    folder = out / "runs" / "1p-low-hierarchical-seed0"
+    assert json.loads((folder / "eval.json").read_text())["trained_episodes"] == 8
+    code, output = run_cli(*command, "--episodes", "12")
+    assert code == 0 and "extending the sweep from 8 to 12 episodes" in output, output
+    assert episodes_of(folder) == list(range(1, 13))
+    assert json.loads((folder / "eval.json").read_text())["trained_episodes"] == 12
+    assert runs.read_config(folder)[0].episodes == 12
+    code, output = run_cli(*command, "--episodes", "12", "--gamma", "0.5")
+    assert code == 2 and "agent.gamma: 0.9 → 0.5" in output and len(output.strip().splitlines()) == 1, output
+    code, output = run_cli(*command, "--episodes", "6")
+    assert code == 2 and "episodes: 12 → 6" in output, output

@@ -129,9 +129,16 @@ QUICK = PAPER.replace(
     episodes=2_000,
 )
 
-#: Ours, for both sides learning (docs/learning.md, REPRODUCTION.md): ``quick`` with a 30× smaller
+#: Ours, for both sides learning (docs/learning.md, REPRODUCTION.md): ``quick`` with a 10× smaller
 #: step size (at 1e-3 the prey never learns), target copies every 2000 transitions (the authors'
-#: value) and the wall features, so that the prey can learn where the walls are.
-REPRODUCTION = QUICK.replace(learning_rate=3e-5, target_update_every=2_000, wall_features=True, episodes=1_500)
+#: value), the wall features, so that the prey can learn where the walls are, and the update
+#: schedule that learned most per CPU-second (docs/learning.md section 7): 32 arenas
+#: (``PRESET_ARENAS``) and one update per 32 transitions, that is one per env step.
+REPRODUCTION = QUICK.replace(
+    learning_rate=1e-4, target_update_every=2_000, wall_features=True, replay_ratio=1 / 32, episodes=15_000
+)
 
 PRESETS: dict[str, AgentConfig] = {"paper": PAPER, "quick": QUICK, "reproduction": REPRODUCTION}
+#: Arenas per run each preset is meant for (``train``/``sweep --num-envs`` default to it): the
+#: replay ratio counts updates per transition, and transitions come ``num_envs`` at a time.
+PRESET_ARENAS: dict[str, int] = {"paper": 8, "quick": 8, "reproduction": 32}

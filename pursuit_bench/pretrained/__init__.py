@@ -60,13 +60,33 @@ def read(path: Path) -> tuple[dict[str, torch.Tensor], dict[str, str]]:
 
 def info(condition: str, *, folder: Path | None = None) -> dict[str, Any]:
     """How the shipped agents of ``condition`` were trained: the header of each agent's file,
-    by agent name, with ``training`` parsed back into a dict."""
+    by agent name, with ``training`` parsed back into a dict and numbers as numbers (a
+    safetensors header holds strings only)."""
     found = {}
     for path in sorted(_condition_folder(condition, folder).glob(f"*{SUFFIX}")):
-        header: dict[str, Any] = dict(read(path)[1])
+        header: dict[str, Any] = {key: _typed(value) for key, value in read(path)[1].items()}
         header["training"] = json.loads(header["training"])
         found[path.name.removesuffix(SUFFIX)] = header
     return found
+
+
+def described(condition: str) -> tuple[TrainConfig, dict[str, LearningAgent | ScriptedAgent], dict[str, Any]]:
+    """The shipped agents of ``condition`` with how they were trained: (training config,
+    agents by name, what an evaluation says of them: ``pretrained`` header and ``trained_episodes``)."""
+    header = next(iter(info(condition).values()))
+    shown = {k: v for k, v in header.items() if k not in ("training", "agent", "kind", "format")}
+    about = {"pretrained": shown, "trained_episodes": int(header["trained_episodes"])}
+    return TrainConfig.from_dict(header["training"]), load(condition), about
+
+
+def _typed(value: str) -> Any:
+    """A header value as what it says: an int, a float, or the string itself."""
+    for kind in (int, float):
+        try:
+            return kind(value)
+        except ValueError:
+            continue
+    return value
 
 
 def load(condition: str, *, folder: Path | None = None) -> dict[str, LearningAgent | ScriptedAgent]:

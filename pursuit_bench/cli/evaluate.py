@@ -1,0 +1,100 @@
+"""``pursuit-bench eval``: a trained RUN, or the shipped agents of a condition, evaluated by the
+paper's protocol (:func:`~pursuit_bench.stack.evaluate_folder`, :func:`~pursuit_bench.stack.evaluate_into`).
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from pursuit_bench.cli.options import BadInput, locked, pretrained_options, run_or_pretrained, threads_option
+from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
+
+
+@click.command(name="eval", short_help="Evaluate a run or the shipped agents by the paper's protocol.")
+@click.argument("run", type=click.Path(path_type=Path), required=False)
+@pretrained_options
+@click.option("--episodes", type=click.IntRange(min=1), default=1000, show_default=True, help="Episodes per variant.")
+@click.option(
+    "--seed",
+    type=click.IntRange(min=0),
+    default=12345,
+    show_default=True,
+    help="Seeds the evaluation arenas (every variant plays the same ones).",
+)
+@click.option("--num-envs", type=click.IntRange(min=1), default=64, show_default=True, help="Arenas stepped together.")
+@click.option("--no-record", is_flag=True, help="Write no Rerun recording of the evaluated episodes.")
+@threads_option
+@click.option(
+    "--tag",
+    default=None,
+    help="Write eval-TAG.json, .png and .rrd instead of eval.*, so that evaluations with other seeds "
+    "or episode counts sit side by side.",
+)
+def evaluate(
+    run: Path | None,
+    pretrained: str | None,
+    out: Path | None,
+    episodes: int,
+    seed: int,
+    num_envs: int,
+    no_record: bool,
+    threads: int,
+    tag: str | None,
+) -> None:
+    """Evaluate a trained RUN (or, with --pretrained, a shipped agent) by the paper's protocol;
+    writes eval.json, eval.png and eval.rrd.
+
+    The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
+    the previous ones as they were (exit 130 or 143)."""
+    folder = run_or_pretrained(run, pretrained, out)
+    settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
+    try:
+        with locked(folder, pretrained):
+            import torch
+
+            from pursuit_bench import runs
+
+            torch.set_num_threads(threads)
+            _evaluate_run(folder, runs.eval_paths(folder, tag), pretrained, tag, settings)
+    except ValueError as error:  # RunBusy too
+        raise BadInput(str(error)) from None
+
+
+def _evaluate_run(
+    run: Path, paths: dict[str, Path], pretrained: str | None, tag: str | None, settings: dict[str, Any]
+) -> None:
+    """Evaluate and report. A signal is acted on at the next safe point (a step, or just before
+    the files are put in place), whatever library call it lands in: before that point the
+    previous files stay and the exit status is 130 or 143; after it the new files are complete
+    and the status is 0."""
+    from pursuit_bench import pretrained as shipped
+    from pursuit_bench.stack import evaluate_folder, evaluate_into
+
+    try:
+        with SignalCatcher(raise_at_once=False).active() as signals:
+            if pretrained is None:
+                result = evaluate_folder(run, tag=tag, check=signals.check, **settings)
+            else:
+                config, agents, about = shipped.described(pretrained)
+                result = evaluate_into(paths, config, agents, {**about, "tag": tag}, check=signals.check, **settings)
+            for stop_signal in STOP_SIGNALS:  # the files are complete: a later signal changes nothing
+                signal.signal(stop_signal, signal.SIG_IGN)
+    except Stopped as stopped:
+        click.echo(f"\n{stopped}: evaluation stopped; {run} keeps its previous results", err=True)
+        sys.exit(stopped.exit_code)
+    if signals.signum is not None:
+        click.echo(f"{Stopped(signals.signum)} arrived after the results were complete: they are written", err=True)
+    kind = result["predator_kind"]
+    for panel in result["panels"]:
+        click.echo(
+            f"{panel['predator']}: {kind} {panel['trained']:+.3f}  "
+            f"always-chase {panel['always_chase']:+.3f}  always-stalk {panel['always_stalk']:+.3f}"
+        )
+    click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")
+    if settings["record"]:
+        click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")

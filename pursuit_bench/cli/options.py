@@ -1,0 +1,204 @@
+"""What the commands share: the one-line error, the options of train and sweep (one per
+hyper-parameter, with the presets' values in the help), name lists, and RUN or --pretrained.
+"""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import dataclasses
+import inspect
+import itertools
+import textwrap
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import click
+
+from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS, AgentConfig
+from pursuit_bench.conditions import CONDITIONS
+
+PREDATOR_KINDS = ("hierarchical", "flat", "always_chase", "always_stalk")
+#: Training budgets above this (100 times the paper's 1e6 episodes) are surely a typing error.
+MAX_EPISODES = 100_000_000
+RECORD_EVERY = 100
+
+
+def recording_every(no_record: bool, record_every: int | None) -> int:
+    """The recording period, refusing ``--record-every`` beside ``--no-record``."""
+    if no_record and record_every is not None:
+        raise BadInput("--record-every goes with recording: leave it out with --no-record")
+    return RECORD_EVERY if record_every is None else record_every
+
+
+class BadInput(click.ClickException):
+    """Bad input: one line on stderr, exit status 2 (like click's usage errors)."""
+
+    exit_code = 2
+
+
+def field_docs(cls: type) -> dict[str, str]:
+    """The docstring under each field of a dataclass (they are the CLI's help texts)."""
+    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    body = tree.body[0].body  # type: ignore[attr-defined]
+    docs = {}
+    for node, after in itertools.pairwise(body):
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            if isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant):
+                docs[node.target.id] = " ".join(str(after.value.value).split())
+    return docs
+
+
+def hyperparameter_options(command: Any) -> Any:
+    """Add ``--learning-rate``, ``--gamma``, … : one option per AgentConfig field (but
+    ``episodes``, which ``train --episodes`` sets)."""
+    docs = field_docs(AgentConfig)
+    for f in reversed(dataclasses.fields(AgentConfig)):
+        if f.name == "episodes":
+            continue
+        kind = {"int": int, "float": float, "bool": bool}[str(f.type)]
+        flag = "--" + f.name.replace("_", "-")
+        if kind is bool:
+            flag = f"{flag}/--no-{f.name.replace('_', '-')}"
+        values = ", ".join(f"{name}: {getattr(preset, f.name)}" for name, preset in PRESETS.items())
+        help_text = f"{docs.get(f.name, '')} [{values}]"
+        command = click.option(flag, f.name, type=kind, default=None, help=help_text)(command)
+    return command
+
+
+def training_options(command: Any) -> Any:
+    """The options ``train`` and ``sweep`` share: preset, budget, arenas, physics, recording,
+    checkpoints, log lines."""
+    options = [
+        click.option(
+            "--preset", type=click.Choice(list(PRESETS)), default="quick", show_default=True, help="Hyper-parameters."
+        ),
+        click.option(
+            "--episodes",
+            type=click.IntRange(min=1, max=MAX_EPISODES),
+            default=None,
+            help="Episodes to train [preset's: "
+            + ", ".join(f"{name} {preset.episodes}" for name, preset in PRESETS.items())
+            + "]. With train --resume: the run's saved target unless given, which extends or shortens the run.",
+        ),
+        click.option(
+            "--num-envs",
+            type=click.IntRange(min=1),
+            default=None,
+            help="Arenas stepped together [preset's: "
+            + ", ".join(f"{name} {PRESET_ARENAS[name]}" for name in PRESETS)
+            + "].",
+        ),
+        click.option(
+            "--physics",
+            "physics",
+            type=click.Choice(["pymunk", "numpy"]),
+            default="pymunk",
+            show_default=True,
+            help="Physics backend of the arenas: pymunk (the reference) or the numpy twin.",
+        ),
+        click.option(
+            "--record-every",
+            type=click.IntRange(min=1),
+            default=None,
+            help=f"Record every Nth episode [{RECORD_EVERY}].",
+        ),
+        click.option("--no-record", is_flag=True, help="Write no Rerun recording of training."),
+        click.option(
+            "--checkpoint-every",
+            type=click.IntRange(min=1),
+            default=100,
+            show_default=True,
+            help="Episodes between checkpoints.",
+        ),
+        click.option(
+            "--log-every",
+            type=click.IntRange(min=1),
+            default=100,
+            show_default=True,
+            help="When stderr is not a terminal: a progress line every N episodes (and at least every minute).",
+        ),
+    ]
+    command = hyperparameter_options(command)
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def threads_option(command: Any) -> Any:
+    """``--threads``: torch threads (1, the default, makes results repeat)."""
+    return click.option(
+        "--threads", type=click.IntRange(min=1), default=1, show_default=True, help="torch threads (1: repeatable)."
+    )(command)
+
+
+def names(value: str, known: list[str] | tuple[str, ...], what: str) -> tuple[str, ...]:
+    """``all`` or a comma-separated list of known names."""
+    if value == "all":
+        return tuple(known)
+    names = tuple(v.strip() for v in value.split(",") if v.strip())
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise BadInput(f"--{what} {value!r}: expected 'all' or a comma-separated list of {', '.join(known)}")
+    return names
+
+
+def episode_counts(value: str) -> tuple[int, ...]:
+    """A comma-separated list of episode counts (possibly empty)."""
+    try:
+        return tuple(sorted({int(v) for v in value.split(",") if v.strip()}))
+    except ValueError:
+        raise BadInput(
+            f"--keep-checkpoints {value!r}: expected comma-separated episode counts, e.g. 1500,5000"
+        ) from None
+
+
+def pretrained_options(command: Any) -> Any:
+    """``--pretrained CONDITION`` and ``--out DIR``: the shipped agents instead of a RUN."""
+    command = click.option(
+        "--out",
+        type=click.Path(path_type=Path),
+        default=None,
+        help="With --pretrained: the folder for the results [runs/pretrained-CONDITION].",
+    )(command)
+    return click.option(
+        "--pretrained",
+        type=click.Choice(list(CONDITIONS)),
+        default=None,
+        help="Use the trained agents shipped with the package for this condition (REPRODUCTION.md) instead of a RUN.",
+    )(command)
+
+
+def run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | None) -> Path:
+    """The folder a command works in: RUN, or --out (default runs/pretrained-CONDITION) with --pretrained."""
+    if (run is None) == (pretrained is None):
+        raise click.UsageError("give a RUN folder or --pretrained CONDITION (one of the two)")
+    if out is not None and pretrained is None:
+        raise click.UsageError("--out goes with --pretrained; a RUN's results go into the RUN")
+    if pretrained is not None:
+        folder = out if out is not None else Path("runs") / f"pretrained-{pretrained}"
+        if folder.exists() and not folder.is_dir():
+            raise click.UsageError(f"--out {folder}: exists and is not a folder")
+        if (folder / "config.json").exists():
+            raise click.UsageError(f"--out {folder} holds a training run, whose results are its own: choose another")
+        return folder
+    assert run is not None
+    return run
+
+
+@contextlib.contextmanager
+def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
+    """Hold ``folder``'s lock: a RUN (checked to be one before a lock file is made in it), or the
+    results folder of --pretrained (made if missing). Imports nothing heavy: a refusal is quick."""
+    from pursuit_bench.files import locked as lock
+
+    if pretrained is None:
+        if not folder.is_dir():
+            raise BadInput(f"{folder}: no such run folder")
+        if not (folder / "config.json").is_file():
+            raise BadInput(f"{folder}: not a pursuit-bench run folder (no config.json)")
+    else:
+        folder.mkdir(parents=True, exist_ok=True)
+    with lock(folder):
+        yield

@@ -1,0 +1,89 @@
+"""``pursuit-bench report``: Fig. 2 over seeds, the learning curves, the panel count against
+budget and the convergence verdicts of a sweep (:func:`pursuit_bench.report.write`), or the
+learning curves and a summary of one run.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from pursuit_bench.cli.options import BadInput
+
+
+@click.command(short_help="Fig. 2, curves, budget and convergence of a sweep; curves of a run.")
+@click.argument("where", metavar="SWEEP|RESULTS|RUN", type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(path_type=Path), default=None, help="Where to write [the folder given].")
+def report(where: Path, out: Path | None) -> None:
+    """Fig. 2 over seeds from a sweep's run folders, or from its compact results (what
+    `scripts/export_results.py` writes): fig2.png, curves.png, budget.png, report.md and
+    report.json. On a RUN folder: its learning curves (curves.png) and a summary."""
+    from pursuit_bench import report as reports
+
+    if out is not None and out.exists() and not out.is_dir():
+        raise BadInput(f"--out {out}: exists and is not a folder")
+    if (where / "config.json").is_file():
+        _report_run(where, out or where)
+        return
+    try:
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+        totals = reports.write(where, out)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    click.echo(
+        f"{totals['panels']} panels: hierarchical best in {totals['hierarchical_best']}, best or tied with the best "
+        f"in {totals['hierarchical_best_or_tied']}, interval above both baselines in "
+        f"{totals['hierarchical_interval_above_both']}"
+    )
+    for row in totals["budgets"]:
+        click.echo(f"  at {row['episodes']} episodes: best in {row['hierarchical_best']} of {row['panels']}")
+    click.echo(f"written in {out or where}: {', '.join(totals['written'])}")
+
+
+def _report_run(folder: Path, out: Path) -> None:
+    """One run: what was trained, how far, its last episodes and its evaluation, and curves.png."""
+    from pursuit_bench import report as reports
+    from pursuit_bench.files import atomic_write_bytes
+    from pursuit_bench.plots import curves_png
+
+    config = json.loads((folder / "config.json").read_text())["train"]
+    metrics = folder / "metrics.jsonl"
+    rows = [json.loads(line) for line in metrics.read_text().splitlines()] if metrics.exists() else []
+    click.echo(
+        f"{folder}: {config['condition']}, {config['predator']} predators, {config['prey']} prey, "
+        f"seed {config['seed']}: {len(rows)} of {config['episodes']} episodes trained"
+    )
+    if rows:
+        last = rows[-min(100, len(rows)) :]
+        means = {
+            k.removeprefix("return/"): sum(r[k] for r in last) / len(last) for k in last[0] if k.startswith("return/")
+        }
+        capture = sum(r["captured"] for r in last) / len(last)
+        click.echo(
+            f"  last {len(last)} episodes: return "
+            + " ".join(f"{k} {v:+.2f}" for k, v in means.items())
+            + f" | capture {capture:.0%}"
+        )
+        result = reports.RunResult(
+            folder.name,
+            config["condition"],
+            config["predator"],
+            int(config["seed"]),
+            {},
+            {},
+            reports.block_curve(rows),
+            config,
+        )
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(out / "curves.png", curves_png(reports.curves([result])))
+        click.echo(f"  learning curves: {out / 'curves.png'}")
+    for path in sorted(folder.glob("eval*.json")):
+        result_json = json.loads(path.read_text())
+        for panel in result_json["panels"]:
+            click.echo(
+                f"  {path.name}: {panel['predator']} {result_json['predator_kind']} {panel['trained']:+.3f}, "
+                f"always-chase {panel['always_chase']:+.3f}, always-stalk {panel['always_stalk']:+.3f}"
+            )

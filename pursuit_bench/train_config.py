@@ -1,0 +1,70 @@
+"""One training run's configuration, :class:`TrainConfig`: apart from the training loop so that
+reading a run folder's configuration and refusing bad options import neither torch nor the
+physics (the command line answers at once).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from pursuit_bench.agents.config import QUICK, AgentConfig
+from pursuit_bench.conditions import CONDITIONS, Backend
+
+PredatorKind = Literal["hierarchical", "flat", "always_chase", "always_stalk"]
+PreyKind = Literal["learning", "scripted"]
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """One training run."""
+
+    condition: str = "1p-high"
+    """One of the paper's ten conditions (``pursuit_bench.CONDITIONS``)."""
+    agent: AgentConfig = QUICK
+    """Hyper-parameters shared by every learner (each has its own copy of the state)."""
+    episodes: int = QUICK.episodes
+    """Episodes to train for, counted over all arenas."""
+    num_envs: int = 8
+    """Arenas stepped together. Every arena-step is one transition for every agent."""
+    seed: int = 0
+    """Seeds the arenas, and with each agent's index its network's initialisation, its
+    exploration and its replay sampling."""
+    predator: PredatorKind = "hierarchical"
+    """What the predators are: the paper's hierarchical agent, the flat ablation, or a scripted
+    baseline (which does not learn)."""
+    prey: PreyKind = "learning"
+    """A learning prey (the paper) or the scripted fleeing prey."""
+    batched_learners: bool = True
+    """Stack the predators' learners into one batched computation, and with other runs' (the
+    same results as separate updates, faster); False updates them one by one."""
+    backend: Backend = "pymunk"
+    """Physics backend of the arenas."""
+
+    def __post_init__(self) -> None:
+        if self.condition not in CONDITIONS:
+            raise ValueError(f"condition={self.condition!r}: expected one of {', '.join(CONDITIONS)}")
+        for name in ("episodes", "num_envs"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name}={value!r}: expected an integer >= 1")
+        if self.predator not in ("hierarchical", "flat", "always_chase", "always_stalk"):
+            raise ValueError(
+                f"predator={self.predator!r}: expected 'hierarchical', 'flat', 'always_chase' or 'always_stalk'"
+            )
+        if self.prey not in ("learning", "scripted"):
+            raise ValueError(f"prey={self.prey!r}: expected 'learning' or 'scripted'")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**dataclasses.asdict(self), "agent": self.agent.to_dict()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+        """The inverse of :meth:`to_dict`; unknown keys are a ValueError."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - names)
+        if unknown:
+            raise ValueError(f"unknown training option(s) {unknown}")
+        agent = AgentConfig().replace(**data.get("agent", {}))
+        return cls(**{**data, "agent": agent})
