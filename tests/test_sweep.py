@@ -199,3 +199,15 @@ def test_a_sweep_extends_to_more_episodes_and_names_what_else_differs(tmp_path: 
     assert code == 2 and "agent.gamma: 0.9 → 0.5" in output and len(output.strip().splitlines()) == 1, output
     code, output = run_cli(*command, "--episodes", "6")
     assert code == 2 and "episodes: 12 → 6" in output, output
+
+
+def test_a_stopped_sweep_says_what_it_saved(tmp_path: Path, processes) -> None:
+    out = tmp_path / "s"
+    command = [sys.executable, "-m", "pursuit_bench.cli.main", *SWEEP, "--episodes", "100000", "--out", str(out)]
+    process = processes(command)
+    wait_until(lambda: (out / "sweep.json").exists(), "the sweep's plan written")
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 143, stderr
+    with_checkpoint = sum((out / "runs" / name / "checkpoint.pt").exists() for name in NAMES)
+    assert f"{with_checkpoint} of 4 runs with a checkpoint" in stderr, stderr

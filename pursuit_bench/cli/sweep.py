@@ -177,7 +177,14 @@ def sweep(
     progress.close()
     if signals.signum is not None:
         stopped = Stopped(signals.signum)
-        click.echo(f"\n{stopped}: sweep stopped, every stack checkpointed; rerun the same command to go on", err=True)
+        saved = {name: sweeps.run_status(out / "runs" / name, c, plan.keep_checkpoints) for name, c in configs.items()}
+        started = {name: n for name, (n, _) in saved.items() if n > 0}
+        click.echo(
+            f"\n{stopped}: sweep stopped. On disk: {len(started)} of {len(configs)} runs with a checkpoint "
+            f"({sum(started.values())} episodes in all), {sum(done for _, done in saved.values())} finished; "
+            "the others start from the beginning. Rerun the same command to go on.",
+            err=True,
+        )
         sys.exit(stopped.exit_code)
     click.echo(f"sweep {out}: {len(finished)} of {len(configs)} runs trained and evaluated")
     if not complete:
