@@ -279,3 +279,41 @@ def budget_png(rows: list[dict[str, Any]]) -> bytes:
     ax.set_title("The hierarchical predator against the baselines, by training budget", fontsize=10)
     fig.tight_layout()
     return _png(fig)
+
+
+def law_png(result: dict[str, Any], title: str) -> bytes:
+    """law.png: measured against simulated trajectories for a few pursuits (left), and the
+    fitted gains per predator kind, proportional pursuit's K and navigation's N (right)."""
+    examples: list[dict[str, Any]] = next(iter(result["examples"].values()), [])
+    fig, axes = plt.subplots(1, len(examples) + 2, figsize=(3.6 * (len(examples) + 2), 3.8), squeeze=False)
+    colors = {"pp": "#dd8452", "pn": "#55a868", "mixed": "#8172b3"}
+    for ax, example in zip(axes[0], examples, strict=False):
+        pursuer, target = np.array(example["pursuer"]), np.array(example["target"])
+        ax.plot(target[:, 0], target[:, 1], color="#4c72b0", lw=1.5, label="prey")
+        ax.plot(pursuer[:, 0], pursuer[:, 1], color="black", lw=2, label="predator (measured)")
+        for law, path in example["simulated"].items():
+            path = np.array(path)
+            ax.plot(path[:, 0], path[:, 1], "--", color=colors[law], lw=1, label=f"{law} (simulated)")
+        ax.set_aspect("equal")
+        ax.set_title(f"a pursuit: best law {example['winner']}", fontsize=9)
+        ax.tick_params(labelsize=7)
+    if examples:
+        axes[0][0].legend(fontsize=6)
+    for ax, (law, gain, label) in zip(
+        axes[0][len(examples) :], (("pp", "K", "K (1/s)"), ("pn", "N", "N")), strict=True
+    ):
+        kinds = list(result["kinds"])
+        data = [
+            [g for predator in result["kinds"][k].values() for g in predator["laws"][law]["gains"][gain]] for k in kinds
+        ]
+        for x, values in enumerate(data):
+            jitter = np.random.default_rng(x).uniform(-0.15, 0.15, len(values))
+            ax.scatter(x + jitter, values, s=5, alpha=0.5)
+            if values:
+                ax.plot([x - 0.3, x + 0.3], [np.median(values)] * 2, color="black", lw=2)
+        ax.set_xticks(range(len(kinds)), [k.replace("_", " ") for k in kinds], rotation=25, fontsize=7)
+        ax.set_ylabel(f"fitted {label}, one dot per pursuit", fontsize=8)
+        ax.set_title(f"{'proportional pursuit' if law == 'pp' else 'proportional navigation'}: {gain}", fontsize=9)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _png(fig)

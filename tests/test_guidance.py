@@ -1,8 +1,12 @@
 """Pursuit-law fits against known answers: pursuits made by each law, in discrete steps and in
 continuous time sampled at 10 Hz, with noise; degenerate inputs refused."""
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
+from cli_helpers import run_cli
 
 from pursuit_bench import guidance
 from pursuit_bench.agents.kinds import ScriptedAgent
@@ -137,3 +141,26 @@ def test_degenerate_input_is_refused_with_a_reason() -> None:
         guidance.simulate("pp", {"K": 1.0}, 0.15, good, good + 1, DT)
     with pytest.raises(ValueError, match="expected two"):
         guidance.fit(good, good[:, :1], DT, "pp")
+
+
+def test_the_law_command_on_a_run_and_on_a_sweep(tmp_path: Path) -> None:
+    sweep = tmp_path / "s"
+    code, output = run_cli(
+        "sweep", "--conditions", "1p-low", "--seeds", "2", "--episodes", "6", "--eval-episodes", "4",
+        "--workers", "1", "--no-record", "--out", str(sweep),
+    )  # fmt: skip
+    assert code == 0, output
+    run = sweep / "runs" / "1p-low-hierarchical-seed0"
+    code, output = run_cli("law", str(run), "--episodes", "4")
+    assert code == 0, output
+    result = json.loads((run / "law.json").read_text())
+    assert set(result["kinds"]) == {"hierarchical", "always_chase", "always_stalk", "pure_pursuit"}
+    fits = result["kinds"]["hierarchical"]["predator_0"]
+    assert fits["pursuits"] == len(fits["laws"]["pp"]["gains"]["K"]) and set(fits["wins"]) == {"pp", "pn", "mixed"}
+    assert (run / "law.png").stat().st_size > 10_000
+    code, output = run_cli("law", str(sweep), "--episodes", "3")
+    assert code == 0 and "1p-low hierarchical: best law" in output, output
+    summary = json.loads((sweep / "law.json").read_text())["summary"]
+    assert set(summary["1p-low"]["hierarchical"]["laws"]) == {"pp", "pn", "mixed"}
+    code, output = run_cli("law", str(tmp_path / "nothing"))
+    assert code == 2 and "no such run folder" in output

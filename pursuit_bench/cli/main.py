@@ -13,6 +13,7 @@ import click
 
 from pursuit_bench.cli.analyze import analyze
 from pursuit_bench.cli.evaluate import evaluate
+from pursuit_bench.cli.law import law
 from pursuit_bench.cli.report import report
 from pursuit_bench.cli.sweep import sweep
 from pursuit_bench.cli.train import train
@@ -25,7 +26,7 @@ def main() -> None:
     """pursuit-bench: predators hunt a prey; deep RL picks how hard, parallel navigation where."""
 
 
-for command in (conditions, train, evaluate, sweep, report, analyze, view):
+for command in (conditions, train, evaluate, sweep, report, analyze, law, view):
     main.add_command(command)
 
 

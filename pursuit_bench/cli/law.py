@@ -1,0 +1,97 @@
+"""``pursuit-bench law``: which pursuit law the predators follow (:mod:`pursuit_bench.pursuit_laws`),
+for a run, the shipped agents or every run of a sweep.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import click
+
+from pursuit_bench.cli.options import BadInput, locked, pretrained_options, run_or_pretrained, threads_option
+
+
+@click.command(short_help="Fit pursuit laws (pursuit, navigation, mixed) to the predators' pursuits.")
+@click.argument("folder", metavar="[RUN|SWEEP]", type=click.Path(path_type=Path), required=False)
+@pretrained_options
+@click.option("--episodes", type=click.IntRange(min=1), default=20, show_default=True, help="Episodes to play per run.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seeds the episodes.")
+@threads_option
+def law(folder: Path | None, pretrained: str | None, out: Path | None, episodes: int, seed: int, threads: int) -> None:
+    """Fit proportional pursuit, proportional navigation and the mixed law to every predator's
+    pursuits (docs/pursuit-law.md), beside the scripted predators in their places: law.json and
+    law.png. On a SWEEP: every evaluated run (without the scripted references), summarised per
+    condition and kind over seeds."""
+    where = run_or_pretrained(folder, pretrained, out)
+    if pretrained is None and (where / "sweep.json").is_file():
+        _law_sweep(where, episodes, seed, threads)
+        return
+    try:
+        with locked(where, pretrained):
+            import torch
+
+            from pursuit_bench import pretrained as shipped
+            from pursuit_bench import pursuit_laws, runs
+
+            torch.set_num_threads(threads)
+            if pretrained is None:
+                config, agents = runs.read_config(where)[0], runs.load_agents(where)
+                name = where.name
+            else:
+                config, agents, _ = shipped.described(pretrained)
+                name = f"shipped agents of {pretrained}"
+            result = pursuit_laws.analyse(config.condition, agents, config.predator, episodes, seed)  # type: ignore[arg-type]
+            _write(where, result, f"{name}: {config.condition}, pursuit laws fitted to {episodes} episodes")
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    for kind, predators in result["kinds"].items():
+        for predator, fits in predators.items():
+            click.echo(f"{kind} {predator}: {_line(fits)}")
+    click.echo(f"written: law.json, law.png in {where}")
+
+
+def _line(fits: dict[str, Any]) -> str:
+    if not fits["pursuits"]:
+        return "no pursuit long enough to fit"
+    laws = fits["laws"]
+    wins = ", ".join(f"{law} {share:.0%}" for law, share in fits["wins"].items())
+    return (
+        f"{fits['pursuits']} pursuits; best law {fits['winner']} ({wins}); median K {laws['pp']['median']['K']:.2f}/s, "
+        f"N {laws['pn']['median']['N']:.2f}, delay {laws['pp']['median']['delay']:.1f} s"
+    )
+
+
+def _write(folder: Path, result: dict[str, Any], title: str) -> None:
+    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.plots import law_png
+
+    atomic_write_bytes(folder / "law.png", law_png(result, title))
+    atomic_write_text(folder / "law.json", json.dumps(result) + "\n")
+
+
+def _law_sweep(sweep: Path, episodes: int, seed: int, threads: int) -> None:
+    import torch
+
+    from pursuit_bench import pursuit_laws, runs
+    from pursuit_bench.files import atomic_write_text
+
+    torch.set_num_threads(threads)
+    per_run = []
+    for folder in sorted((sweep / "runs").glob("*/eval.json")):
+        run = folder.parent
+        config = runs.read_config(run)[0]
+        agents = runs.load_agents(run)
+        result = pursuit_laws.analyse(config.condition, agents, config.predator, episodes, seed, references=False)  # type: ignore[arg-type]
+        per_run.append({**result, "run": run.name})
+        winners = ", ".join(f"{p} {fits['winner']}" for p, fits in result["kinds"][config.predator].items())
+        click.echo(f"{run.name}: {winners}")
+    if not per_run:
+        raise BadInput(f"{sweep}: no evaluated run (runs/*/eval.json) to fit")
+    summary = pursuit_laws.over_seeds(per_run)
+    atomic_write_text(sweep / "law.json", json.dumps({"summary": summary, "runs": per_run}) + "\n")
+    for condition, kinds in summary.items():
+        for kind, entry in kinds.items():
+            click.echo(f"{condition} {kind}: best law {entry['winner']} ({entry['predator_runs']} predator-runs)")
+    click.echo(f"written: law.json in {sweep}")
