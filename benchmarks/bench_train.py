@@ -3,7 +3,11 @@ Stable-Baselines3's DQN on the single-agent view, in one process and one run.
 
     python benchmarks/bench_train.py [--runs 5] [--steps 100] [--repeats 3]
 
-For each of 1p-high and 3p-high-shared: transitions/s (arena-steps of one run, every agent
+First the compute bound: the FLOPs of one member-update (batch 64) over a matrix-product rate
+measured on this CPU in the same run, and a member-update's time alone and at 24 members as a
+ratio to it. Then, for each of 1p-high and 3p-high-shared and each of two schedules (``quick``:
+one update per transition on 8 arenas, the earlier sessions' maths; ``reproduction``: one
+update per env step of 32 arenas): transitions/s (arena-steps of one run, every agent
 learning) and member-updates/s (one gradient step of one agent's network) of one run alone
 (one after another, K runs take K times as long) and of K seeds stacked. Then SB3's DQN on
 ``gymnasium.make("pursuit_bench/Pursuit-v0", agent="prey_0")`` with the same batch size and
@@ -22,7 +26,7 @@ import numpy as np
 import torch
 
 import pursuit_bench  # noqa: F401  (registers the Gymnasium env)
-from pursuit_bench.agents.config import QUICK
+from pursuit_bench.agents.config import PRESET_ARENAS, QUICK, REPRODUCTION
 from pursuit_bench.agents.dqn import WALL_FEATURES, DQNLearner
 from pursuit_bench.agents.network import HEAD, TRUNK
 from pursuit_bench.task import obs_size
@@ -36,7 +40,7 @@ def trainer_rates(configs: list[TrainConfig], steps: int, repeats: int) -> tuple
     rates = []
     for _ in range(repeats):
         trainer = Trainer(configs)
-        while trainer.groups[0].learner.steps < AGENT.learning_starts:
+        while trainer.groups[0].learner.steps < configs[0].agent.learning_starts:
             trainer.step()  # fill the replays first: we time learning, not warm-up
         updates_before = sum(g.learner.updates * g.learner.members for g in trainer.groups)
         start = time.perf_counter()
@@ -48,7 +52,7 @@ def trainer_rates(configs: list[TrainConfig], steps: int, repeats: int) -> tuple
         rates.append((transitions / elapsed, member_updates / elapsed))
     transitions = statistics.median(r[0] for r in rates)
     updates = statistics.median(r[1] for r in rates)
-    return transitions, updates, 1.0 / updates
+    return transitions, updates, 1.0 / updates if updates > 0 else float("nan")
 
 
 def member_update_flops(n_obs: int, n_actions: int, batch: int) -> float:
@@ -144,19 +148,25 @@ def main() -> None:
         seconds = member_update_seconds(members, n_obs, args.repeats)
         print(f"member-update at {members:2d} members: {seconds * 1e3:.3f} ms = {seconds / bound:.1f}x the bound")
     print(f"{'':36s} {'transitions/s':>14s} {'member-updates/s':>17s} {'ms/member-update':>17s} {'x bound':>8s}")
-    for condition in ("1p-high", "3p-high-shared"):
-        configs = [
-            TrainConfig(condition=condition, agent=AGENT, num_envs=args.num_envs, seed=s, episodes=10**9)
-            for s in range(args.runs)
-        ]
-        alone = trainer_rates(configs[:1], args.steps, args.repeats)
-        stacked = trainer_rates(configs, max(1, args.steps // 2), args.repeats)
-        for label, (t, u, s) in (
-            (f"{condition}, one run at a time", alone),
-            (f"{condition}, {args.runs} stacked", stacked),
-        ):
-            print(f"{label:36s} {t:14,.0f} {u:17,.0f} {s * 1e3:17.3f} {s / bound:8.1f}")
-        print(f"  stacked / one after another: {stacked[0] / alone[0]:.2f}x transitions/s")
+    schedules = (
+        ("quick", AGENT, args.num_envs),  # one update per transition: the maths of earlier sessions
+        ("reproduction", REPRODUCTION.replace(learning_starts=500), PRESET_ARENAS["reproduction"]),
+    )
+    for schedule, agent, arenas in schedules:
+        for condition in ("1p-high", "3p-high-shared"):
+            configs = [
+                TrainConfig(condition=condition, agent=agent, num_envs=arenas, seed=s, episodes=10**9)
+                for s in range(args.runs)
+            ]
+            alone = trainer_rates(configs[:1], args.steps, args.repeats)
+            stacked = trainer_rates(configs, max(1, args.steps // 2), args.repeats)
+            for label, (t, u, sec) in (
+                (f"{condition}, {schedule}, one run", alone),
+                (f"{condition}, {schedule}, {args.runs} stacked", stacked),
+            ):
+                per_update = f"{sec * 1e3:17.3f} {sec / bound:8.1f}" if u > 0 else f"{'–':>17s} {'–':>8s}"
+                print(f"{label:36s} {t:14,.0f} {u:17,.0f} {per_update}")
+            print(f"  stacked / one after another: {stacked[0] / alone[0]:.2f}x transitions/s")
     sb3 = sb3_rates(args.steps * 4, args.repeats)
     if sb3 is None:
         print("SB3 DQN: not installed (pip install stable-baselines3)")

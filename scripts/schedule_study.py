@@ -145,9 +145,13 @@ def figure(out: Path, png: Path) -> None:
                 f"| {condition} | {name} | {final['cpu_s']:.0f} | {final['predator_margin']:+.3f} |"
                 f" {final['prey_margin']:+.3f} | {reached if reached is not None else 'not reached'} |"
             )
-    axes[0][0].legend(fontsize=7)
+    shown: dict[str, Any] = {}
+    for ax in axes.ravel():
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            shown.setdefault(label, handle)
+    fig.legend(list(shown.values()), list(shown), fontsize=7, loc="lower center", ncol=4)
     fig.suptitle("Quality against CPU time: mean of 3 seeds, band = their range", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(png, dpi=110)
 
 
