@@ -76,10 +76,13 @@ def test_same_seed_same_eval(tmp_path: Path) -> None:
         (["train", "--gamma", "1.5"], "gamma=1.5"),
         (["eval", "nowhere"], "nowhere: no such run folder"),
         (["view", "missing.rrd"], "missing.rrd: no such recording"),
+        (["eval", "--pretrained", "1p-high", "--out", "a-file"], "--out a-file: exists and is not a folder"),
+        (["analyze", "--pretrained", "1p-high", "--out", "a-file"], "--out a-file: exists and is not a folder"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: list[str], message: str) -> None:
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "a-file").write_text("not a folder")
     code, output = run_cli(*args)
     assert code == 2 and message in output and "Traceback" not in output, output
 
@@ -161,3 +164,10 @@ def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: 
     assert verify.returncode == 0, verify.stdout + verify.stderr
     code, output = run_cli("eval", str(out), "--episodes", "4", "--no-record")
     assert code == 0, output  # the checkpoint written on Ctrl-C loads
+
+
+def test_a_training_log_line_has_an_eta(tmp_path: Path) -> None:
+    command = cli_command("train", "--condition", "1p-low", "--out", str(tmp_path / "r"), *TINY, "--no-record")
+    done = subprocess.run([*command, "--log-every", "4"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "episodes/s | ETA " in done.stderr, done.stderr

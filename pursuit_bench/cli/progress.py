@@ -14,7 +14,8 @@ import click
 
 
 class Progress:
-    """``update(done)`` as episodes finish; ``describe()`` gives the figures to show."""
+    """``update(done)`` as episodes finish; ``describe()`` gives the figures to show; ``eta``
+    adds the time left at the rate so far to each log line."""
 
     def __init__(
         self,
@@ -26,8 +27,9 @@ class Progress:
         every_episodes: int = 100,
         every_seconds: float = 60.0,
         file: TextIO | None = None,
+        eta: bool = False,
     ) -> None:
-        self.label, self.total, self.describe = label, total, describe
+        self.label, self.total, self.describe, self.eta = label, total, describe, eta
         self.every_episodes, self.every_seconds = every_episodes, every_seconds
         self.file = file or sys.stderr
         self._bar: Any = None
@@ -52,9 +54,12 @@ class Progress:
 
     def _line(self, now: float) -> None:
         rate = (self._done - self._start_done) / max(now - self._start, 1e-9)
+        eta = ""
+        if self.eta and rate > 0:  # by episodes: the ETA of one run (a sweep's describe() gives its own)
+            eta = f" | ETA {time.strftime('%H:%M:%S', time.gmtime((self.total - self._done) / rate))}"
         click.echo(
             f"{self.label}: episode {self._done}/{self.total} ({self._done / self.total:.0%}) | "
-            f"{rate:.1f} episodes/s | {self.describe()}",
+            f"{rate:.1f} episodes/s{eta} | {self.describe()}",
             file=self.file,
         )
         self._last_time, self._last_done = now, self._done

@@ -268,6 +268,7 @@ def _train_run(
         run.episodes_done,
         lambda: _describe(returns, captures, last["epsilon"]),
         every_episodes=log_every,
+        eta=True,
     )
     train_stack([run], record=record, should_stop=lambda: signals.signum is not None, on_episode=on_episode)
     progress.close()
