@@ -445,6 +445,51 @@ def markdown(table: list[dict[str, Any]], totals: dict[str, Any], sweep: Path) -
     return "\n".join(lines) + "\n"
 
 
+def prey_table(results: list[RunResult]) -> list[dict[str, Any]]:
+    """Per condition, the hierarchical runs' learned prey against their trained predators,
+    means over seeds: greedy (its capture, wall-exit and survival rates and return, beside
+    ``FleeingPrey`` in its place) and at ε = 0.1 as the paper evaluates (capture rate, mean
+    episode length)."""
+    rows = []
+    for condition in [c for c in CONDITIONS if any(r.condition == c for r in results)]:
+        runs = [r for r in results if r.condition == condition and r.kind == "hierarchical"]
+        checks = [r.evaluation["prey_check"] for r in runs if r.evaluation.get("prey_check")]
+        if not checks:
+            continue
+        greedy = {k: float(np.mean([c["learned_greedy"][k] for c in checks])) for k in checks[0]["learned_greedy"]}
+        fleeing = {k: float(np.mean([c["fleeing_prey"][k] for c in checks])) for k in checks[0]["fleeing_prey"]}
+        beats = sum(c["learned_greedy"]["return"] > c["fleeing_prey"]["return"] for c in checks)
+        rows.append(
+            {
+                "condition": condition,
+                "seeds": len(checks),
+                "greedy": greedy,
+                "fleeing_prey": fleeing,
+                "beats_fleeing_prey": beats,
+                "epsilon_capture_rate": float(np.mean([r.evaluation["capture_rate"] for r in runs])),
+                "epsilon_episode_length": float(np.mean([r.evaluation["episode_length"] for r in runs])),
+            }
+        )
+    return rows
+
+
+def prey_markdown(rows: list[dict[str, Any]]) -> str:
+    """The prey table as markdown (REPRODUCTION.md quotes it)."""
+    lines = [
+        "| condition | greedy prey: caught | left the arena | survived 300 steps | return | FleeingPrey: return "
+        "| seeds beating FleeingPrey | prey ε = 0.1: caught | mean length |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        g = r["greedy"]
+        lines.append(
+            f"| {r['condition']} | {g['captured']:.0%} | {g['left_area']:.0%} | {g['survived']:.0%} | "
+            f"{g['return']:+.2f} | {r['fleeing_prey']['return']:+.2f} | {r['beats_fleeing_prey']} of {r['seeds']} | "
+            f"{r['epsilon_capture_rate']:.0%} | {r['epsilon_episode_length']:.0f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
 def budget_markdown(rows: list[dict[str, Any]]) -> str:
     """The panel count against budget as a markdown table (REPRODUCTION.md quotes it)."""
     lines = [
@@ -508,6 +553,10 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
     text += "\n## Panels against the training budget\n\n" + budget_markdown(budgets)
     text += "\n## Convergence (last tenth of training against the tenth before it)\n\n"
     text += convergence_markdown(converged)
+    prey = prey_table(results)
+    text += "\n## The learned prey (hierarchical runs, final budget)\n\n" + prey_markdown(prey)
+    payload["prey"] = prey
+    atomic_write_text(out / "report.json", json.dumps(payload, indent=2) + "\n")
     atomic_write_text(out / "report.md", text)
     atomic_write_bytes(out / "fig2.png", fig2_png(table))
     written = ["report.md", "report.json", "fig2.png"]
