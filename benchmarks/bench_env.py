@@ -3,7 +3,9 @@
 Single envs (PettingZoo parallel API, actions sampled from each env's own spaces, resets when an
 episode ends): ours on both backends and MPE2's ``simple_tag``. Batched envs (random actions
 drawn every step, autoreset): ours on both backends at several sizes, VMAS ``simple_tag`` on the
-CPU and JaxMARL ``MPE_simple_tag_v3`` under ``jit(vmap(step))`` on the CPU. Every peer is set
+CPU and JaxMARL ``MPE_simple_tag_v3`` under ``jit(vmap(step))`` on the CPU. The single-agent
+Gymnasium view N at once: ``gymnasium.make_vec`` (ours, over the batched core) against
+Gymnasium's own ``SyncVectorEnv`` over N envs. Every peer is set
 to 3 predators (adversaries), 1 prey (good agent) and no obstacles; peers that are not
 installed are skipped (``bash scripts/bench.sh`` installs them). Each figure is the median of
 ``--repeats`` timed runs after a warm-up.
@@ -20,6 +22,7 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
+import gymnasium
 import numpy as np
 
 import pursuit_bench
@@ -59,6 +62,28 @@ def ours_batched(backend: str, num_envs: int, steps: int, repeats: int) -> float
     def run() -> None:
         for _ in range(steps):
             env.step(np.stack([rng.integers(0, 2, shape), rng.integers(0, 12, shape)], axis=-1))
+
+    return median_rate(run, steps * num_envs, repeats)
+
+
+def gymnasium_vector(mode: str, num_envs: int, steps: int, repeats: int) -> float:
+    """Env steps per second (arena-steps) of the single-agent view, N at once: ours
+    (``gymnasium.make_vec``, the batched core) or Gymnasium's ``SyncVectorEnv`` over N envs,
+    both same-step autoreset, sampled actions."""
+    from gymnasium.vector import AutoresetMode, SyncVectorEnv
+
+    kwargs = {"agent": "predator_0", "condition": CONDITION}
+    if mode == "ours":
+        env = gymnasium.make_vec("pursuit_bench/Pursuit-v0", num_envs=num_envs, **kwargs)
+    else:
+        makers = [lambda: gymnasium.make("pursuit_bench/Pursuit-v0", **kwargs) for _ in range(num_envs)]
+        env = SyncVectorEnv(makers, autoreset_mode=AutoresetMode.SAME_STEP)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+
+    def run() -> None:
+        for _ in range(steps):
+            env.step(env.action_space.sample())
 
     return median_rate(run, steps * num_envs, repeats)
 
@@ -159,6 +184,11 @@ def main() -> None:
         report("VMAS simple_tag (cpu)", size, vmas_batched(size, steps, args.repeats))
         report("JaxMARL MPE_simple_tag_v3 (cpu, jit+vmap)", size, jaxmarl_batched(size, steps, args.repeats))
 
+    for size in (16, 256):
+        steps = max(10, 20_000 // size)
+        report("Gymnasium make_vec, ours (batched core)", size, gymnasium_vector("ours", size, steps, args.repeats))
+        report("Gymnasium SyncVectorEnv over single envs", size, gymnasium_vector("sync", size, steps, args.repeats))
+
     def best(name: str, size: int | None = None) -> float | None:
         rates = [r for n, s, r in rows if n == name and r is not None and (size is None or s == size)]
         return max(rates) if rates else None
@@ -171,6 +201,11 @@ def main() -> None:
             "batched pymunk vs VMAS, each at its best size",
             best("pursuit-bench batched (pymunk)"),
             best("VMAS simple_tag (cpu)"),
+        ),
+        (
+            "Gymnasium vector env vs SyncVectorEnv at 256 envs",
+            best("Gymnasium make_vec, ours (batched core)", 256),
+            best("Gymnasium SyncVectorEnv over single envs", 256),
         ),
         (
             "numpy backend vs JaxMARL at 1024 envs",

@@ -2,8 +2,9 @@
 
 ``parallel_env(condition=…)`` and ``env(condition=…)`` build the PettingZoo envs;
 ``VectorPursuitEnv`` steps B arenas at once; ``gymnasium.make("pursuit_bench/Pursuit-v0",
-agent=…, condition=…)`` is a single-agent view; ``load_agents(RUN)`` returns the trained agents
-of a run folder by name.
+agent=…, condition=…)`` is a single-agent view, and ``gymnasium.make_vec`` with the same
+arguments N of them as one Gymnasium ``VectorEnv`` over the batched core; ``load_agents(RUN)``
+returns the trained agents of a run folder by name.
 
 The envs, numba's kernels and torch are imported when first used, so that ``import
 pursuit_bench`` (and the command line's ``--help``) stays quick.
@@ -49,6 +50,7 @@ _SUBMODULES = {
     "conditions",
     "evaluate",
     "guidance",
+    "gym_vector",
     "navigation",
     "policies",
     "pretrained",
@@ -75,4 +77,8 @@ def __getattr__(name: str) -> Any:
 
 
 if "pursuit_bench/Pursuit-v0" not in gymnasium.registry:
-    gymnasium.register(id="pursuit_bench/Pursuit-v0", entry_point="pursuit_bench.single:PursuitSingleAgentEnv")
+    gymnasium.register(
+        id="pursuit_bench/Pursuit-v0",
+        entry_point="pursuit_bench.single:PursuitSingleAgentEnv",
+        vector_entry_point="pursuit_bench.gym_vector:PursuitVectorEnv",
+    )

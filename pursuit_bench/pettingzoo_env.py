@@ -12,6 +12,7 @@ from pettingzoo import AECEnv, ParallelEnv
 from pettingzoo.utils import parallel_to_aec
 
 from pursuit_bench import task
+from pursuit_bench.agent_spaces import POSITION_BOUND, VELOCITY_BOUND, agent_spaces
 from pursuit_bench.conditions import TaskConfig, resolve_condition
 from pursuit_bench.core import PursuitCore
 from pursuit_bench.render import draw_arena
@@ -19,13 +20,6 @@ from pursuit_bench.world import Backend
 
 #: Observation bounds: positions lie in [-1, 1], relative positions in [-2√2, 2√2] and speeds
 #: never exceed the chase terminal speed 1.44 (see ``world``), so these bounds always hold.
-_POSITION_BOUND, _RELATIVE_BOUND, _VELOCITY_BOUND = 1.0, 3.0, 2.0
-
-
-def _observation_bounds(n_agents: int) -> np.ndarray:
-    own = [_POSITION_BOUND] * 2 + [_VELOCITY_BOUND] * 2
-    other = [_POSITION_BOUND] * 2 + [_RELATIVE_BOUND] * 2 + [_VELOCITY_BOUND] * 2
-    return np.array(own + other * (n_agents - 1), dtype=np.float32)
 
 
 def _action_error(agent: str, action: Any, allowed: str) -> ValueError:
@@ -180,13 +174,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         self._n_predators = self.config.n_predators
         self._agent_set = set(self.possible_agents)
         self._parse_plan = [(a, i < self._n_predators) for i, a in enumerate(self.possible_agents)]
-        bound = _observation_bounds(self.config.n_agents)
-        self._observation_spaces = {a: spaces.Box(-bound, bound, dtype=np.float32) for a in self.possible_agents}
-        self._action_spaces: dict[str, spaces.Space[Any]] = {
-            a: spaces.MultiDiscrete([2, task.N_DIRECTIONS]) for a in self.possible_agents[:-1]
-        }
-        self._action_spaces["prey_0"] = spaces.Discrete(task.N_DIRECTIONS)
-        state_bound = np.array([_POSITION_BOUND] * 2 + [_VELOCITY_BOUND] * 2, dtype=np.float32)
+        self._observation_spaces, self._action_spaces = agent_spaces(self.config)
+        state_bound = np.array([POSITION_BOUND] * 2 + [VELOCITY_BOUND] * 2, dtype=np.float32)
         self.state_space = spaces.Box(
             -np.tile(state_bound, self.config.n_agents), np.tile(state_bound, self.config.n_agents), dtype=np.float32
         )

@@ -10,12 +10,15 @@ the seed given to ``reset``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector.utils import batch_space
 
 from pursuit_bench import task
+from pursuit_bench.agent_spaces import agent_spaces
 from pursuit_bench.conditions import TaskConfig, resolve_condition
 from pursuit_bench.core import PursuitCore
 from pursuit_bench.world import Backend
@@ -46,6 +49,17 @@ class VectorPursuitEnv:
     float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
     (B, n_predators), ``left_area`` (B, n_agents), ``episode_return`` (B, n_agents) and
     ``episode_length`` (B,) of the episodes that ended.
+
+    Spaces: ``single_observation_spaces`` and ``single_action_spaces`` by agent name (those of
+    the PettingZoo env), ``observation_spaces`` and ``action_spaces`` the same batched over the
+    B arenas (Gymnasium's ``batch_space``); ``observation_space`` is the whole (B, n_agents,
+    6n-2) array ``step`` returns.
+
+    The contract beside the ecosystem's: like VMAS, every array is stacked with the arena axis
+    first and every arena steps on every call; unlike VMAS (a list per agent) and PettingZoo
+    (dicts by agent name), agents are a second axis, in ``agents`` order; unlike PettingZoo, no
+    agent leaves an arena mid-episode: an episode ends for all of its agents at once, and that
+    arena resets on the same step (above).
     """
 
     def __init__(self, num_envs: int, condition: str | None = None, *, backend: Backend = "pymunk", **options: Any):
@@ -57,12 +71,21 @@ class VectorPursuitEnv:
         self.n_agents = self.config.n_agents
         self.obs_size = task.obs_size(self.n_agents)
         self.observation_space = spaces.Box(-np.inf, np.inf, (num_envs, self.n_agents, self.obs_size), np.float32)
+        self.single_observation_spaces, self.single_action_spaces = agent_spaces(self.config)
+        self.observation_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_observation_spaces.items()}
+        self.action_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_action_spaces.items()}
         self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence().spawn(num_envs)]
         self._returns = np.zeros((num_envs, self.n_agents))
 
-    def reset(self, seed: int | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        """Start every arena afresh; with a seed, reseed every arena's generator from it."""
-        if seed is not None:
+    def reset(self, seed: int | Sequence[int] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start every arena afresh. ``seed``: one integer, from which every arena's generator is
+        spawned; or one integer per arena, arena i then drawing exactly what a single env reset
+        with ``seed[i]`` draws (Gymnasium's ``SyncVectorEnv`` seeds its env i with ``seed + i``)."""
+        if isinstance(seed, (list, tuple, np.ndarray)):
+            if len(seed) != self.num_envs:
+                raise ValueError(f"seed: expected one per arena ({self.num_envs}), got {len(seed)}")
+            self._rngs = [np.random.default_rng(int(s)) for s in seed]
+        elif seed is not None:
             self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(self.num_envs)]
         obs = self.core.reset(np.arange(self.num_envs), self._rngs)
         self._returns[:] = 0.0
