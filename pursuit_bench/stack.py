@@ -176,13 +176,15 @@ def evaluate_into(
     num_envs: int = 64,
     record: bool = True,
     check: Callable[[], None] = lambda: None,
+    predator_kind: str | None = None,
 ) -> dict[str, Any]:
     """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
     (with ``about`` and the training config), its bar chart and a recording to ``paths``
     (``runs.eval_paths``) together: each is written under a temporary name and renamed when all
     are complete, so an interruption leaves the previous ones as they were. ``check()`` is
     called before every step and once more before the files are put in place: an exception it
-    raises stops the evaluation with the previous files untouched."""
+    raises stops the evaluation with the previous files untouched. ``predator_kind`` names the
+    predators in the result (default: the config's)."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder = None
     try:
@@ -198,7 +200,7 @@ def evaluate_into(
             num_envs=num_envs,
             recorder=recorder,
             backend=config.backend,
-            predator_kind=config.predator,
+            predator_kind=predator_kind or config.predator,
             check=check,
         )
         result.update({**about, "training": config.to_dict()})

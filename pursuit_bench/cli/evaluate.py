@@ -33,7 +33,15 @@ from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
     "--tag",
     default=None,
     help="Write eval-TAG.json, .png and .rrd instead of eval.*, so that evaluations with other seeds "
-    "or episode counts sit side by side.",
+    "or episode counts sit side by side [with --agent: the replaced agents' names].",
+)
+@click.option(
+    "--agent",
+    "agents",
+    multiple=True,
+    metavar="NAME=MODULE:FACTORY",
+    help="Replace agent NAME (predator_0, …, prey_0) by the object MODULE:FACTORY() returns, with act(observation) "
+    "(pursuit_bench/external.py), and evaluate it like a trained one. Repeatable.",
 )
 def evaluate(
     run: Path | None,
@@ -45,6 +53,7 @@ def evaluate(
     no_record: bool,
     threads: int,
     tag: str | None,
+    agents: tuple[str, ...],
 ) -> None:
     """Evaluate a trained RUN (or, with --pretrained, a shipped agent) by the paper's protocol;
     writes eval.json, eval.png and eval.rrd.
@@ -52,6 +61,9 @@ def evaluate(
     The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
     the previous ones as they were (exit 130 or 143)."""
     folder = run_or_pretrained(run, pretrained, out)
+    specs = _agent_specs(agents)
+    if specs and tag is None:
+        tag = "-".join(specs)  # eval-predator_0.json: the run's own eval.json stays its own
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     try:
         with locked(folder, pretrained):
@@ -60,28 +72,55 @@ def evaluate(
             from pursuit_bench import runs
 
             torch.set_num_threads(threads)
-            _evaluate_run(folder, runs.eval_paths(folder, tag), pretrained, tag, settings)
-    except ValueError as error:  # RunBusy too
+            _evaluate_run(folder, runs.eval_paths(folder, tag), pretrained, tag, settings, specs)
+    except ValueError as error:  # RunBusy, a bad --agent, …
         raise BadInput(str(error)) from None
 
 
+def _agent_specs(values: tuple[str, ...]) -> dict[str, str]:
+    specs = {}
+    for value in values:
+        name, _, spec = value.partition("=")
+        if not name or not spec:
+            raise BadInput(f"--agent {value!r}: expected NAME=MODULE:FACTORY, e.g. predator_0=my_agents:make")
+        specs[name] = spec
+    return specs
+
+
 def _evaluate_run(
-    run: Path, paths: dict[str, Path], pretrained: str | None, tag: str | None, settings: dict[str, Any]
+    run: Path,
+    paths: dict[str, Path],
+    pretrained: str | None,
+    tag: str | None,
+    settings: dict[str, Any],
+    specs: dict[str, str],
 ) -> None:
     """Evaluate and report. A signal is acted on at the next safe point (a step, or just before
     the files are put in place), whatever library call it lands in: before that point the
     previous files stay and the exit status is 130 or 143; after it the new files are complete
     and the status is 0."""
+    from pursuit_bench import external, runs
     from pursuit_bench import pretrained as shipped
-    from pursuit_bench.stack import evaluate_folder, evaluate_into
+    from pursuit_bench.stack import evaluate_into
 
+    if pretrained is None:
+        config = runs.read_config(run)[0]
+        state = runs.load_checkpoint(run)
+        agents: dict[str, Any] = runs.load_agents(run, state)
+        about: dict[str, Any] = {"trained_episodes": int(state["episodes_done"])}
+    else:
+        config, agents, about = shipped.described(pretrained)
+    kind = None
+    if specs:
+        agents = external.replaced(agents, specs)
+        about["external_agents"] = specs
+        first = next(iter(agents.values()))
+        kind = first.kind if isinstance(first, external.ExternalAgent) else None
     try:
         with SignalCatcher(raise_at_once=False).active() as signals:
-            if pretrained is None:
-                result = evaluate_folder(run, tag=tag, check=signals.check, **settings)
-            else:
-                config, agents, about = shipped.described(pretrained)
-                result = evaluate_into(paths, config, agents, {**about, "tag": tag}, check=signals.check, **settings)
+            result = evaluate_into(
+                paths, config, agents, {**about, "tag": tag}, check=signals.check, predator_kind=kind, **settings
+            )
             for stop_signal in STOP_SIGNALS:  # the files are complete: a later signal changes nothing
                 signal.signal(stop_signal, signal.SIG_IGN)
     except Stopped as stopped:

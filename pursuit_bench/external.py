@@ -1,0 +1,72 @@
+"""Agents from other people's code, evaluated by the paper's protocol (``pursuit-bench eval
+--agent NAME=MODULE:FACTORY``).
+
+The agent protocol: an object with
+
+- ``act(observation) -> action`` for *one* observation, a float32 array of the agent's
+  observation space (``6n - 2`` numbers, docs/spec.md); the action as the agent's action space
+  has it: a predator ``(mode, direction)`` (two integers, mode 0 stalk / 1 chase, direction
+  0..11), the prey a direction 0..11;
+- optionally ``act_batch(observations) -> actions`` for a stack (B, 6n - 2), returning (B, 2)
+  for a predator or (B,) for the prey; used instead of ``act`` when present (faster).
+
+The factory, ``MODULE:FACTORY``, is a callable taking no argument that returns such an object
+(a few lines around a Stable-Baselines3 model, say: README). An external agent acts as it is:
+the ε = 0.1 the paper gives a learned prey during evaluation is applied to our own agents only.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+
+def load_factory(spec: str) -> Callable[[], Any]:
+    """The callable ``MODULE:FACTORY`` names; ValueError saying what is wrong."""
+    module_name, _, attribute = spec.partition(":")
+    if not module_name or not attribute:
+        raise ValueError(f"{spec!r}: expected MODULE:FACTORY, e.g. my_agents:make_predator")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as error:
+        raise ValueError(f"{spec!r}: cannot import {module_name!r} ({error})") from None
+    factory = getattr(module, attribute, None)
+    if not callable(factory):
+        raise ValueError(f"{spec!r}: {module_name} has no callable {attribute!r}")
+    return factory
+
+
+class ExternalAgent:
+    """An object of the agent protocol made usable where our agents are (``act_batch`` with the
+    evaluation's keywords); ``kind`` names it in eval.json."""
+
+    def __init__(self, name: str, agent: Any, spec: str, predator: bool) -> None:
+        if not (hasattr(agent, "act") or hasattr(agent, "act_batch")):
+            raise ValueError(f"{spec!r} returned {type(agent).__name__}, which has neither act nor act_batch")
+        self.name, self.agent, self.kind, self.predator = name, agent, f"external ({spec})", predator
+
+    def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> np.ndarray:
+        if hasattr(self.agent, "act_batch"):
+            actions = np.asarray(self.agent.act_batch(obs))
+        else:
+            actions = np.array([np.asarray(self.agent.act(o)) for o in obs])
+        actions = actions.astype(np.int64).reshape((len(obs), 2) if self.predator else (len(obs),))
+        return actions
+
+    def act(self, observation: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any:
+        return self.act_batch(np.asarray(observation)[None])[0]
+
+
+def replaced(agents: dict[str, Any], specs: dict[str, str]) -> dict[str, Any]:
+    """``agents`` with the named ones replaced by what their factories return."""
+    names = list(agents)
+    unknown = sorted(set(specs) - set(names))
+    if unknown:
+        raise ValueError(f"--agent {unknown[0]}=…: no such agent here; expected one of {', '.join(names)}")
+    out = dict(agents)
+    for name, spec in specs.items():
+        out[name] = ExternalAgent(name, load_factory(spec)(), spec, predator=name != names[-1])
+    return out
