@@ -9,6 +9,7 @@ import matplotlib
 
 matplotlib.use("Agg")  # files only: no display needed
 import matplotlib.pyplot as plt
+import matplotlib.ticker
 import numpy as np
 
 BASELINES = (("always_chase", "always chase", "#dd8452"), ("always_stalk", "always stalk", "#55a868"))
@@ -263,6 +264,7 @@ def budget_png(rows: list[dict[str, Any]]) -> bytes:
     ax.annotate("paper: best in 16 of 22", (episodes[0], 16), xytext=(3, 3), textcoords="offset points", fontsize=8)
     ax.set_xscale("log")
     ax.set_xticks(episodes, [str(e) for e in episodes])
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_ylim(0, panels + 0.5)
     ax.set_xlabel("training episodes per run")
     ax.set_ylabel(f"panels (of {panels})")
