@@ -7,6 +7,10 @@ new transitions enter at the largest priority seen so far; importance weights ar
 Two samplers share one small interface (``set``, ``draw``): a flat cumulative sum, simplest and
 fastest at the paper's capacity 1e4, and a sum tree for large capacities. Both recompute sums
 from the stored priorities (the tree from its children), so nothing drifts with time.
+
+:class:`ReplayStack` holds the replays of every member of a stacked learner in one array with a
+member axis and samples them in one call (the cumulative sum, per member); the learners use it,
+and it is tested to draw exactly as one :class:`PrioritizedReplay` per member.
 """
 
 from __future__ import annotations
