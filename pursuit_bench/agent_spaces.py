@@ -25,10 +25,14 @@ def observation_bounds(n_agents: int) -> np.ndarray:
 
 def agent_spaces(config: TaskConfig) -> tuple[dict[str, spaces.Space[Any]], dict[str, spaces.Space[Any]]]:
     """(observation spaces, action spaces) by agent name: a predator's action is
-    ``MultiDiscrete([2, 12])`` (mode, direction), the prey's ``Discrete(12)``."""
+    ``MultiDiscrete([2, 12])`` (mode, direction), the prey's ``Discrete(12)``; with
+    ``config.continuous`` every agent's is ``Box(-1, 1, (2,))``, an acceleration in its
+    line-of-sight frame."""
     bound = observation_bounds(config.n_agents)
     names = list(config.agent_names)
     observation: dict[str, spaces.Space[Any]] = {a: spaces.Box(-bound, bound, dtype=np.float32) for a in names}
+    if config.continuous:
+        return observation, {a: spaces.Box(-1.0, 1.0, (2,), dtype=np.float32) for a in names}
     action: dict[str, spaces.Space[Any]] = {a: spaces.MultiDiscrete([2, task.N_DIRECTIONS]) for a in names[:-1]}
     action[names[-1]] = spaces.Discrete(task.N_DIRECTIONS)
     return observation, action

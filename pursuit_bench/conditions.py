@@ -40,6 +40,12 @@ class TaskConfig:
     """``"terminate"`` (paper): touching a wall costs -1 and ends the episode.
     ``"contain"``: the wall stops the disk, the -1 is paid on every step in contact and the
     episode goes on."""
+    continuous: bool = False
+    """Continuous actions: each agent's action is an acceleration in its line-of-sight frame, a
+    2-vector of norm <= 1 (longer ones are scaled down to 1) times the agent's maximum (the
+    prey's 3.0, a predator's chase level 3.6); a predator is in chase mode, and pays the chase
+    cost, in a step whose acceleration exceeds the stalk level (1.8, a norm above 0.5). The
+    discrete task is this one restricted to its 24 (predator) or 12 (prey) points."""
 
     def __post_init__(self) -> None:
         if (
@@ -57,6 +63,8 @@ class TaskConfig:
             raise ValueError(f"max_steps={self.max_steps!r}: expected an integer >= 1")
         if self.wall_rule not in ("terminate", "contain"):
             raise ValueError(f"wall_rule={self.wall_rule!r}: expected 'terminate' or 'contain'")
+        if not isinstance(self.continuous, bool):
+            raise ValueError(f"continuous={self.continuous!r}: expected True or False")
 
     @property
     def n_agents(self) -> int:
@@ -88,9 +96,10 @@ def resolve_condition(condition: str | None = None, **options: object) -> TaskCo
     """Build a :class:`TaskConfig` from a condition name and/or explicit options.
 
     A condition fixes ``n_predators``, ``chase_cost`` and ``reward_sharing``; giving one of those
-    as well is an error (ambiguous). ``max_steps`` and ``wall_rule`` may be set with either.
+    as well is an error (ambiguous). ``max_steps``, ``wall_rule`` and ``continuous`` may be set
+    with either.
     """
-    known = {"n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule"}
+    known = {"n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule", "continuous"}
     unknown = set(options) - known
     if unknown:
         raise ValueError(f"unknown option(s) {sorted(unknown)}: expected some of {sorted(known)}")

@@ -88,7 +88,15 @@ class PursuitCore:
 
     def step(self, modes: np.ndarray, directions: np.ndarray) -> StepResult:
         """Advance every arena by one step; ``modes`` (B, n_predators), ``directions`` (B, n_agents)."""
-        acc = task.accelerations(self._los, modes, directions)  # LOS from the last observation
+        return self._advance(task.accelerations(self._los, modes, directions), modes)  # LOS of the last observation
+
+    def step_continuous(self, actions: np.ndarray) -> StepResult:
+        """Advance every arena by one step of continuous actions (B, n_agents, 2), each in its
+        agent's line-of-sight frame (``task.continuous_accelerations``)."""
+        acc, modes = task.continuous_accelerations(self._los, actions, self.config.n_predators)
+        return self._advance(acc, modes)
+
+    def _advance(self, acc: np.ndarray, modes: np.ndarray) -> StepResult:
         contacts = self.world.step(acc)
         self.steps += 1
         world = self.world

@@ -18,6 +18,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from pursuit_bench.pettingzoo_env import as_continuous
 from pursuit_bench.policies import Policy
 from pursuit_bench.single import default_opponent
 from pursuit_bench.vector import VectorPursuitEnv, put_actions
@@ -37,7 +38,8 @@ class PursuitVectorEnv(VectorEnv):
         **options: the task's other options (``max_steps``, ``wall_rule`` …).
 
     Observations are (N, 6n-2) float32; actions (N, 2) integers for a predator, (N,) for the
-    prey; rewards (N,) float64; ``terminated`` and ``truncated`` (N,) bool.
+    prey, or (N, 2) floats for either with ``continuous=True``; rewards (N,) float64;
+    ``terminated`` and ``truncated`` (N,) bool.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}  # noqa: RUF012
@@ -81,20 +83,29 @@ class PursuitVectorEnv(VectorEnv):
         return self._obs[:, self._index], {}
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        batch = np.zeros((self.num_envs, self._vec.n_agents, 2), dtype=np.int64)
+        continuous = self._vec.config.continuous
+        batch = np.zeros((self.num_envs, self._vec.n_agents, 2), dtype=np.float64 if continuous else np.int64)
         mine = np.asarray(actions)
-        if mine.shape[:1] != (self.num_envs,) or mine.dtype.kind not in "iu":
-            raise ValueError(f"actions: expected integers with {self.num_envs} rows, got {mine.dtype} {mine.shape}")
-        put_actions(batch, self._index, mine.astype(np.int64))
+        expected = "floats" if continuous else "integers"
+        if mine.shape[:1] != (self.num_envs,) or mine.dtype.kind not in ("fiu" if continuous else "iu"):
+            raise ValueError(f"actions: expected {expected} with {self.num_envs} rows, got {mine.dtype} {mine.shape}")
+        if continuous:
+            batch[:, self._index] = mine
+        else:
+            put_actions(batch, self._index, mine.astype(np.int64))
+        n_predators = self._vec.n_agents - 1
         for i, name in enumerate(self._vec.agents):
             if name == self.agent:
                 continue
             policy, obs = self._opponents[name], self._obs[:, i]
             if hasattr(policy, "act_batch"):
-                chosen = np.asarray(policy.act_batch(obs))
+                chosen = np.asarray(policy.act_batch(obs)).astype(np.int64)
             else:
-                chosen = np.array([np.asarray(policy.act(o)) for o in obs])
-            put_actions(batch, i, chosen.astype(np.int64))
+                chosen = np.array([np.asarray(policy.act(o)) for o in obs]).astype(np.int64)
+            if continuous:  # a scripted opponent's discrete action as the vector equal to it
+                batch[:, i] = [as_continuous(name, c, i < n_predators) for c in chosen]
+            else:
+                put_actions(batch, i, chosen)
         self._obs, rewards, terminated, truncated, info = self._vec.step(batch)
         i = self._index
         done = info["done"]

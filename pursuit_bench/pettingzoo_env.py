@@ -26,6 +26,21 @@ def _action_error(agent: str, action: Any, allowed: str) -> ValueError:
     return ValueError(f"action for {agent}: got {action!r}, expected {allowed}")
 
 
+def parse_continuous(agent: str, action: Any) -> np.ndarray:
+    """One agent's continuous action as a float64 2-vector, or ``ValueError``."""
+    arr = np.asarray(action, dtype=np.float64) if not isinstance(action, str) else None
+    if arr is None or arr.shape != (2,) or not np.isfinite(arr).all():
+        raise _action_error(agent, action, "a finite 2-vector (acceleration in the line-of-sight frame, norm <= 1)")
+    return arr
+
+
+def as_continuous(agent: str, action: Any, is_predator: bool) -> np.ndarray:
+    """A discrete action (a scripted opponent's, say) as the continuous action equal to it."""
+    mode, direction = parse_action(agent, action, is_predator)
+    level = (1.0 if mode == task.CHASE else task.CHASE_NORM) if is_predator else 1.0
+    return task.as_xy(task.ROTATIONS[direction] * level)
+
+
 def parse_action(agent: str, action: Any, is_predator: bool) -> tuple[int, int]:
     """``(mode, direction)`` from one agent's action (the prey's mode is 0), or ``ValueError``."""
     # fast paths for what the action spaces sample: an int64 pair, an integer scalar
@@ -79,6 +94,12 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     | ``predator_i`` | ``MultiDiscrete([2, 12])`` | (mode: 0 stalk / 1 chase, direction k) |
     | ``prey_0`` | ``Discrete(12)`` | direction k |
 
+    With ``continuous=True`` every agent's action is ``Box(-1, 1, (2,))``: an acceleration in its
+    LOS frame (u, v), norm ≤ 1 (longer is scaled to 1), times its maximum (prey 3.0, predators
+    3.6); a predator chases, and pays for it, in a step whose norm exceeds 0.5 (the stalk level
+    1.8). Discrete action (mode, k) is the vector ``level · (cos(-k·30°), sin(-k·30°))`` with
+    level 0.5 (stalk) or 1 (chase), the prey's level 1: the two give the same trajectories.
+
     ## Observation Space
 
     ``Box(float32, (6n - 2,))`` per agent for n agents in all (10, 16, 22). (u, v) is the
@@ -125,6 +146,7 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     - ``max_steps`` (default 300);
     - ``wall_rule``: ``"terminate"`` (default, the paper) or ``"contain"`` (walls stop the disk,
       -1 per step in contact, the episode goes on);
+    - ``continuous``: ``False`` (default, the paper) or ``True`` (acceleration actions, above);
     - ``render_mode``: ``None`` or ``"rgb_array"``;
     - ``backend``: ``"pymunk"`` (default, the reference) or ``"numpy"``.
 
@@ -153,6 +175,7 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         reward_sharing: str | None = None,
         max_steps: int | None = None,
         wall_rule: str | None = None,
+        continuous: bool = False,
         render_mode: str | None = None,
         backend: Backend = "pymunk",
     ) -> None:
@@ -163,6 +186,7 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             reward_sharing=reward_sharing,
             max_steps=max_steps,
             wall_rule=wall_rule,
+            continuous=continuous,
         )
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: expected None or 'rgb_array'")
@@ -244,9 +268,13 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
                 raise ValueError(f"actions for unknown agent(s) {unknown}: expected keys {self.agents}")
             missing = sorted(self._agent_set - set(actions))
             raise ValueError(f"missing action for {', '.join(missing)}: every live agent acts each step")
-        parsed = [parse_action(agent, actions[agent], predator) for agent, predator in self._parse_plan]
-        modes, directions = np.array(parsed, dtype=np.int64).T[:, None, :]
-        r = self._core.step(modes[:, : self._n_predators], directions)
+        if self.config.continuous:
+            vectors = np.stack([parse_continuous(agent, actions[agent]) for agent in self.possible_agents])
+            r = self._core.step_continuous(vectors[None])
+        else:
+            parsed = [parse_action(agent, actions[agent], predator) for agent, predator in self._parse_plan]
+            modes, directions = np.array(parsed, dtype=np.int64).T[:, None, :]
+            r = self._core.step(modes[:, : self._n_predators], directions)
         agents = self.possible_agents
         terminated, truncated = bool(r.terminated[0]), bool(r.truncated[0])
         obs = dict(zip(agents, r.observations[0], strict=True))
@@ -270,7 +298,16 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         pass
 
 
-ENV_OPTIONS = ("n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule", "render_mode", "backend")
+ENV_OPTIONS = (
+    "n_predators",
+    "chase_cost",
+    "reward_sharing",
+    "max_steps",
+    "wall_rule",
+    "continuous",
+    "render_mode",
+    "backend",
+)
 
 
 def parallel_env(condition: str | None = None, **options: Any) -> PursuitParallelEnv:

@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from pursuit_bench.pettingzoo_env import PursuitParallelEnv
+from pursuit_bench.pettingzoo_env import PursuitParallelEnv, as_continuous
 from pursuit_bench.policies import AlwaysChase, FleeingPrey, Policy
 
 
@@ -29,7 +29,9 @@ class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
         opponents: policies (``act(observation) -> action``) for some or all of the other agents;
             the rest get :func:`default_opponent`.
         render_mode: ``None`` or ``"rgb_array"``.
-        **options: any other option of the multi-agent env (``max_steps``, ``wall_rule`` …).
+        **options: any other option of the multi-agent env (``max_steps``, ``wall_rule``,
+            ``continuous`` …); with ``continuous=True`` the opponents' discrete actions are
+            turned into the continuous actions equal to them.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012 - typed so by gym.Env
@@ -67,6 +69,9 @@ class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         actions = {a: policy.act(self._last_obs[a]) for a, policy in self.opponents.items()}
+        if self._env.config.continuous:  # the scripted opponents act discretely: their equal vectors
+            predators = self._env.possible_agents[:-1]
+            actions = {a: as_continuous(a, act, a in predators) for a, act in actions.items()}
         actions[self.agent] = action
         obs, rewards, terminated, truncated, infos = self._env.step(actions)
         self._last_obs = obs

@@ -158,6 +158,42 @@ def accelerations(los: np.ndarray, modes: np.ndarray, directions: np.ndarray) ->
     return as_xy(out)
 
 
+#: A predator's continuous action norm above which it is in chase mode (the stalk level).
+CHASE_NORM = ACCEL_STALK / ACCEL_CHASE
+
+
+def continuous_accelerations(los: np.ndarray, actions: np.ndarray, n_predators: int) -> tuple[np.ndarray, np.ndarray]:
+    """World-frame accelerations (B, n_agents, 2) and the predators' modes (B, n_predators) from
+    continuous actions (B, n_agents, 2) in each agent's line-of-sight frame (x along the line of
+    sight, y to its left): norms above 1 scaled to 1, times the agent's maximum; a predator
+    chases in a step whose norm exceeds the stalk level (:data:`CHASE_NORM`)."""
+    z = as_complex(actions)
+    norm = np.abs(z)
+    z = np.where(norm > 1.0 + 1e-9, z / np.maximum(norm, 1e-300), z)
+    out = np.empty(z.shape, dtype=np.complex128)
+    _continuous_kernel(as_complex(los), z, n_predators, out)  # the discrete kernel's arithmetic, bit for bit
+    modes = (np.abs(z[:, :n_predators]) > CHASE_NORM + 1e-9).astype(np.int64)
+    return as_xy(out), modes
+
+
+@numba.njit(cache=True)
+def _continuous_kernel(los, z, n_predators, out):
+    batch, n = z.shape
+    for b in range(batch):
+        for i in range(n):
+            magnitude = ACCEL_CHASE if i < n_predators else ACCEL_PREY
+            out[b, i] = los[b, i] * z[b, i] * magnitude
+
+
+def discrete_as_continuous(modes: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """The continuous actions (B, n_agents, 2) equal to discrete ones: predators' modes
+    (B, n_predators) and every agent's direction (B, n_agents)."""
+    n_predators = modes.shape[1]
+    level = np.ones(directions.shape)
+    level[:, :n_predators] = np.where(modes == CHASE, 1.0, CHASE_NORM)
+    return as_xy(ROTATIONS[directions] * level)
+
+
 @dataclass
 class Outcome:
     """Rewards and episode end of one step, per arena."""

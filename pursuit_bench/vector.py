@@ -43,7 +43,8 @@ class VectorPursuitEnv:
         **options: ``n_predators``, ``chase_cost``, ``reward_sharing``, ``max_steps``, ``wall_rule``.
 
     ``step(actions)`` takes integers of shape (B, n_agents, 2): ``(mode, direction)`` per agent
-    (the prey's mode is ignored) and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
+    (the prey's mode is ignored), or with ``continuous=True`` floats of that shape (each agent's
+    acceleration in its line-of-sight frame), and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
     (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
     with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
     float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
@@ -102,8 +103,14 @@ class VectorPursuitEnv:
         return arr
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        arr = self._check(actions)
-        result = self.core.step(arr[:, :-1, 0], arr[..., 1])
+        if self.config.continuous:
+            vectors = np.asarray(actions, dtype=np.float64)
+            if vectors.shape != (self.num_envs, self.n_agents, 2) or not np.isfinite(vectors).all():
+                raise ValueError(f"actions: expected finite floats of shape {(self.num_envs, self.n_agents, 2)}")
+            result = self.core.step_continuous(vectors)
+        else:
+            arr = self._check(actions)
+            result = self.core.step(arr[:, :-1, 0], arr[..., 1])
         self._returns += result.rewards
         done = result.terminated | result.truncated
         info: dict[str, Any] = {
