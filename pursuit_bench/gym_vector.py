@@ -18,9 +18,9 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from pursuit_bench.pettingzoo_env import as_continuous
+from pursuit_bench import task
 from pursuit_bench.policies import Policy
-from pursuit_bench.single import default_opponent
+from pursuit_bench.single import resolve_opponents
 from pursuit_bench.vector import VectorPursuitEnv, put_actions
 
 
@@ -57,15 +57,9 @@ class PursuitVectorEnv(VectorEnv):
             raise ValueError(f"num_envs={num_envs!r}: expected an integer >= 1")
         self._vec = VectorPursuitEnv(num_envs, condition, backend=backend, **options)  # type: ignore[arg-type]
         names = self._vec.agents
-        if agent not in names:
-            raise ValueError(f"agent={agent!r}: expected one of {names}")
-        opponents = dict(opponents or {})
-        strangers = sorted(set(opponents) - set(names) | ({agent} & set(opponents)))
-        if strangers:
-            raise ValueError(f"opponents for {strangers}: expected other agents of {names}")
+        self._opponents = resolve_opponents(agent, names, opponents)
         self.agent, self.num_envs = agent, num_envs
         self._index = names.index(agent)
-        self._opponents = {a: opponents.get(a) or default_opponent(a) for a in names if a != agent}
         self.single_observation_space = self._vec.single_observation_spaces[agent]
         self.single_action_space = self._vec.single_action_spaces[agent]
         self.observation_space = batch_space(self.single_observation_space, num_envs)
@@ -84,29 +78,28 @@ class PursuitVectorEnv(VectorEnv):
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         continuous = self._vec.config.continuous
-        batch = np.zeros((self.num_envs, self._vec.n_agents, 2), dtype=np.float64 if continuous else np.int64)
         mine = np.asarray(actions)
         expected = "floats" if continuous else "integers"
         if mine.shape[:1] != (self.num_envs,) or mine.dtype.kind not in ("fiu" if continuous else "iu"):
             raise ValueError(f"actions: expected {expected} with {self.num_envs} rows, got {mine.dtype} {mine.shape}")
-        if continuous:
-            batch[:, self._index] = mine
-        else:
+        batch = np.zeros((self.num_envs, self._vec.n_agents, 2), dtype=np.int64)  # the opponents' discrete actions
+        if not continuous:
             put_actions(batch, self._index, mine.astype(np.int64))
-        n_predators = self._vec.n_agents - 1
         for i, name in enumerate(self._vec.agents):
             if name == self.agent:
                 continue
             policy, obs = self._opponents[name], self._obs[:, i]
             if hasattr(policy, "act_batch"):
-                chosen = np.asarray(policy.act_batch(obs)).astype(np.int64)
+                chosen = np.asarray(policy.act_batch(obs))
             else:
-                chosen = np.array([np.asarray(policy.act(o)) for o in obs]).astype(np.int64)
-            if continuous:  # a scripted opponent's discrete action as the vector equal to it
-                batch[:, i] = [as_continuous(name, c, i < n_predators) for c in chosen]
-            else:
-                put_actions(batch, i, chosen)
-        self._obs, rewards, terminated, truncated, info = self._vec.step(batch)
+                chosen = np.array([np.asarray(policy.act(o)) for o in obs])
+            put_actions(batch, i, chosen.astype(np.int64))
+        if continuous:  # the opponents' actions as the vectors equal to them, then ours
+            vectors = task.discrete_as_continuous(batch[:, :-1, 0], batch[..., 1])
+            vectors[:, self._index] = mine
+            self._obs, rewards, terminated, truncated, info = self._vec.step(vectors)
+        else:
+            self._obs, rewards, terminated, truncated, info = self._vec.step(batch)
         i = self._index
         done = info["done"]
         infos: dict[str, Any] = {}

@@ -37,7 +37,7 @@ def parse_continuous(agent: str, action: Any) -> np.ndarray:
 def as_continuous(agent: str, action: Any, is_predator: bool) -> np.ndarray:
     """A discrete action (a scripted opponent's, say) as the continuous action equal to it."""
     mode, direction = parse_action(agent, action, is_predator)
-    level = (1.0 if mode == task.CHASE else task.CHASE_NORM) if is_predator else 1.0
+    level = task.MODE_NORMS[mode] if is_predator else 1.0
     return task.as_xy(task.ROTATIONS[direction] * level)
 
 

@@ -138,6 +138,17 @@ def load_agents(
     return agents
 
 
+def described(
+    folder: Path, checkpoint_name: str = CHECKPOINT
+) -> tuple[TrainConfig, dict[str, LearningAgent | ScriptedAgent], dict[str, Any]]:
+    """A trained run's agents with how they were trained: (training config, agents by name with
+    that checkpoint's weights, what an evaluation says of them: ``trained_episodes``); the run
+    folder's twin of ``pretrained.described``."""
+    config, _ = read_config(folder)
+    state = load_checkpoint(folder, checkpoint_name)
+    return config, load_agents(folder, state), {"trained_episodes": int(state["episodes_done"])}
+
+
 def recording_path(folder: Path) -> Path:
     """``train.rrd``, or the next ``train.resumeK.rrd`` if earlier sessions wrote theirs."""
     path = folder / "train.rrd"

@@ -18,6 +18,18 @@ def default_opponent(agent: str) -> Policy:
     return FleeingPrey() if agent.startswith("prey") else AlwaysChase()
 
 
+def resolve_opponents(agent: str, agents: list[str], opponents: Mapping[str, Policy] | None) -> dict[str, Policy]:
+    """The policy of every agent but ``agent``: the given ones, :func:`default_opponent` for the
+    rest; ValueError for an unknown learning agent or an opponent that is not another agent."""
+    if agent not in agents:
+        raise ValueError(f"agent={agent!r}: expected one of {agents}")
+    given = dict(opponents or {})
+    strangers = sorted(set(given) - set(agents) | ({agent} & set(given)))
+    if strangers:
+        raise ValueError(f"opponents for {strangers}: expected other agents of {agents}")
+    return {a: given.get(a) or default_opponent(a) for a in agents if a != agent}
+
+
 class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
     """One agent of :class:`~pursuit_bench.pettingzoo_env.PursuitParallelEnv` as a Gymnasium env.
 
@@ -45,16 +57,9 @@ class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
         **options: Any,
     ) -> None:
         self._env = PursuitParallelEnv(condition, render_mode=render_mode, **options)
-        agents = self._env.possible_agents
-        if agent not in agents:
-            raise ValueError(f"agent={agent!r}: expected one of {agents}")
-        opponents = dict(opponents or {})
-        strangers = sorted(set(opponents) - set(agents) | ({agent} & set(opponents)))
-        if strangers:
-            raise ValueError(f"opponents for {strangers}: expected other agents of {agents}")
+        self.opponents = resolve_opponents(agent, self._env.possible_agents, opponents)
         self.agent = agent
         self.render_mode = render_mode
-        self.opponents = {a: opponents.get(a) or default_opponent(a) for a in agents if a != agent}
         self.observation_space = self._env.observation_space(agent)
         self.action_space = self._env.action_space(agent)
         self._last_obs: dict[str, np.ndarray] = {}

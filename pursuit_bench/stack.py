@@ -149,14 +149,12 @@ def evaluate_folder(
     write ``eval.json``, ``eval.png`` and ``eval.rrd`` (``eval-TAG.*``) into it: see
     :func:`evaluate_into`. ``checkpoint``: which of the folder's checkpoints (the latest by
     default, or a milestone's). Returns the result."""
-    config, _ = runs.read_config(folder)
-    state = runs.load_checkpoint(folder, checkpoint)
-    agents = runs.load_agents(folder, state)
+    config, agents, about = runs.described(folder, checkpoint)
     return evaluate_into(
         runs.eval_paths(folder, tag),
         config,
         agents,
-        {"trained_episodes": int(state["episodes_done"]), "tag": tag},
+        {**about, "tag": tag},
         episodes=episodes,
         seed=seed,
         num_envs=num_envs,

@@ -160,6 +160,8 @@ def accelerations(los: np.ndarray, modes: np.ndarray, directions: np.ndarray) ->
 
 #: A predator's continuous action norm above which it is in chase mode (the stalk level).
 CHASE_NORM = ACCEL_STALK / ACCEL_CHASE
+#: The norm of the continuous action equal to a predator's discrete mode (stalk, chase).
+MODE_NORMS = np.array([CHASE_NORM, 1.0])
 
 
 def continuous_accelerations(los: np.ndarray, actions: np.ndarray, n_predators: int) -> tuple[np.ndarray, np.ndarray]:
@@ -190,7 +192,7 @@ def discrete_as_continuous(modes: np.ndarray, directions: np.ndarray) -> np.ndar
     (B, n_predators) and every agent's direction (B, n_agents)."""
     n_predators = modes.shape[1]
     level = np.ones(directions.shape)
-    level[:, :n_predators] = np.where(modes == CHASE, 1.0, CHASE_NORM)
+    level[:, :n_predators] = MODE_NORMS[modes]
     return as_xy(ROTATIONS[directions] * level)
 
 

@@ -145,7 +145,6 @@ class Run:
         self.episodes_done = 0
         self.env_steps = 0
         self.last_losses: dict[str, float] = {}
-        self.final_state: dict[str, Any] | None = None
         self.obs, _ = self.env.reset(seed=config.seed)
         self.chase_steps = np.zeros((config.num_envs, self.n_predators))
         self.traces = (
@@ -197,16 +196,12 @@ class Run:
             metrics.update({"length": float(length), "captured": float(record.captured), **extra})
             metrics.update({f"chase_fraction/{a}": f for a, f in record.chase_fraction.items()})
             self.recorder.log_metrics(self.episodes_done, metrics)
-        if self.finished:  # its learners' members may go on beside companions: keep this state
-            self.final_state = self._state_now()
         if self.on_episode is not None:
             self.on_episode(record)
 
     def state_dict(self) -> dict[str, Any]:
-        """The run's checkpoint: as it is, or as it was when the run finished."""
-        return self.final_state if self.final_state is not None else self._state_now()
-
-    def _state_now(self) -> dict[str, Any]:
+        """The run's checkpoint. A finished run stops stepping and leaves its learners with its
+        members' final state (:meth:`Trainer._drop_finished`), so this stays as it finished."""
         return {
             "episodes_done": self.episodes_done,
             "env_steps": self.env_steps,

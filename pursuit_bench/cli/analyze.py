@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from pursuit_bench.cli.options import BadInput, locked, pretrained_options, run_or_pretrained, threads_option
+from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretrained, threads_option, trained_agents
 
 
 @click.command(short_help="Fig. 3: value streams and chase modes of a run or a sweep.")
@@ -33,17 +33,9 @@ def analyze(
         _analyze_sweep(where, episodes, seed, threads)
         return
     try:
-        with locked(where, pretrained):
-            import torch
+        with trained_agents(where, pretrained, threads) as (config, agents, _):
+            from pursuit_bench import fig3
 
-            from pursuit_bench import fig3, runs
-            from pursuit_bench import pretrained as shipped
-
-            torch.set_num_threads(threads)
-            if pretrained is None:
-                config, agents = runs.read_config(where)[0], runs.load_agents(where)
-            else:
-                config, agents, _ = shipped.described(pretrained)
             result = fig3.analyze_run(where, config, agents, episodes, seed)
     except ValueError as error:  # RunBusy, not a run folder, not trained, not hierarchical
         raise BadInput(str(error)) from None

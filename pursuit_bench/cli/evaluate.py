@@ -11,7 +11,8 @@ from typing import Any
 
 import click
 
-from pursuit_bench.cli.options import BadInput, locked, pretrained_options, run_or_pretrained, threads_option
+from pursuit_bench import runs
+from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretrained, threads_option, trained_agents
 from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
 
 
@@ -66,13 +67,9 @@ def evaluate(
         tag = "-".join(specs)  # eval-predator_0.json: the run's own eval.json stays its own
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     try:
-        with locked(folder, pretrained):
-            import torch
-
-            from pursuit_bench import runs
-
-            torch.set_num_threads(threads)
-            _evaluate_run(folder, runs.eval_paths(folder, tag), pretrained, tag, settings, specs)
+        paths = runs.eval_paths(folder, tag)
+        with trained_agents(folder, pretrained, threads) as (config, trained, about):
+            _evaluate_run(folder, paths, config, trained, about, tag, settings, specs)
     except ValueError as error:  # RunBusy, a bad --agent, …
         raise BadInput(str(error)) from None
 
@@ -90,7 +87,9 @@ def _agent_specs(values: tuple[str, ...]) -> dict[str, str]:
 def _evaluate_run(
     run: Path,
     paths: dict[str, Path],
-    pretrained: str | None,
+    config: Any,
+    agents: dict[str, Any],
+    about: dict[str, Any],
     tag: str | None,
     settings: dict[str, Any],
     specs: dict[str, str],
@@ -99,17 +98,9 @@ def _evaluate_run(
     the files are put in place), whatever library call it lands in: before that point the
     previous files stay and the exit status is 130 or 143; after it the new files are complete
     and the status is 0."""
-    from pursuit_bench import external, runs
-    from pursuit_bench import pretrained as shipped
+    from pursuit_bench import external
     from pursuit_bench.stack import evaluate_into
 
-    if pretrained is None:
-        config = runs.read_config(run)[0]
-        state = runs.load_checkpoint(run)
-        agents: dict[str, Any] = runs.load_agents(run, state)
-        about: dict[str, Any] = {"trained_episodes": int(state["episodes_done"])}
-    else:
-        config, agents, about = shipped.described(pretrained)
     kind = None
     if specs:
         agents = external.replaced(agents, specs)

@@ -10,7 +10,7 @@ from typing import Any
 
 import click
 
-from pursuit_bench.cli.options import BadInput, locked, pretrained_options, run_or_pretrained, threads_option
+from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretrained, threads_option, trained_agents
 
 
 @click.command(short_help="Fit pursuit laws (pursuit, navigation, mixed) to the predators' pursuits.")
@@ -29,20 +29,11 @@ def law(folder: Path | None, pretrained: str | None, out: Path | None, episodes:
         _law_sweep(where, episodes, seed, threads)
         return
     try:
-        with locked(where, pretrained):
-            import torch
+        with trained_agents(where, pretrained, threads) as (config, agents, _):
+            from pursuit_bench import pursuit_laws
 
-            from pursuit_bench import pretrained as shipped
-            from pursuit_bench import pursuit_laws, runs
-
-            torch.set_num_threads(threads)
-            if pretrained is None:
-                config, agents = runs.read_config(where)[0], runs.load_agents(where)
-                name = where.name
-            else:
-                config, agents, _ = shipped.described(pretrained)
-                name = f"shipped agents of {pretrained}"
-            result = pursuit_laws.analyse(config.condition, agents, config.predator, episodes, seed)  # type: ignore[arg-type]
+            name = where.name if pretrained is None else f"shipped agents of {pretrained}"
+            result = pursuit_laws.analyse(config.condition, agents, config.predator, episodes, seed)
             _write(where, result, f"{name}: {config.condition}, pursuit laws fitted to {episodes} episodes")
     except ValueError as error:
         raise BadInput(str(error)) from None

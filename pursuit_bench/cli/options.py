@@ -202,3 +202,18 @@ def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
         folder.mkdir(parents=True, exist_ok=True)
     with lock(folder):
         yield
+
+
+@contextlib.contextmanager
+def trained_agents(folder: Path, pretrained: str | None, threads: int) -> Iterator[tuple[Any, dict[str, Any], dict]]:
+    """Hold ``folder``'s lock (:func:`locked`) with torch on ``threads`` threads, and give the
+    agents to work with: (training config, agents by name, what an evaluation says of them), a
+    RUN's last checkpoint's (``runs.described``) or the shipped ones' (``pretrained.described``)."""
+    with locked(folder, pretrained):
+        import torch
+
+        from pursuit_bench import pretrained as shipped
+        from pursuit_bench import runs
+
+        torch.set_num_threads(threads)
+        yield runs.described(folder) if pretrained is None else shipped.described(pretrained)
