@@ -5,7 +5,8 @@ episode ends): ours on both backends and MPE2's ``simple_tag``. Batched envs (ra
 drawn every step, autoreset): ours on both backends at several sizes, VMAS ``simple_tag`` on the
 CPU and JaxMARL ``MPE_simple_tag_v3`` under ``jit(vmap(step))`` on the CPU. The single-agent
 Gymnasium view N at once: ``gymnasium.make_vec`` (ours, over the batched core) against
-Gymnasium's own ``SyncVectorEnv`` over N envs. Every peer is set
+Gymnasium's own ``SyncVectorEnv`` over N envs. Ours with 5 obstacles beside ours without, single
+and batched at 256 arenas (the target: within 1.5× of the speed without). Every peer is set
 to 3 predators (adversaries), 1 prey (good agent) and no obstacles; peers that are not
 installed are skipped (``bash scripts/bench.sh`` installs them). Each figure is the median of
 ``--repeats`` timed runs after a warm-up.
@@ -29,6 +30,7 @@ import pursuit_bench
 from pursuit_bench.vector import VectorPursuitEnv
 
 CONDITION = "3p-high-shared"
+OBSTACLES = 5
 
 
 def median_rate(run: Callable[[], None], work: int, repeats: int) -> float:
@@ -53,8 +55,8 @@ def single_env(env: Any, steps: int, repeats: int) -> float:
     return median_rate(run, steps, repeats)
 
 
-def ours_batched(backend: str, num_envs: int, steps: int, repeats: int) -> float:
-    env = VectorPursuitEnv(num_envs, CONDITION, backend=backend)  # type: ignore[arg-type]
+def ours_batched(backend: str, num_envs: int, steps: int, repeats: int, obstacles: int = 0) -> float:
+    env = VectorPursuitEnv(num_envs, CONDITION, backend=backend, obstacles=obstacles)  # type: ignore[arg-type]
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     shape = (num_envs, env.n_agents)
@@ -184,6 +186,13 @@ def main() -> None:
         report("VMAS simple_tag (cpu)", size, vmas_batched(size, steps, args.repeats))
         report("JaxMARL MPE_simple_tag_v3 (cpu, jit+vmap)", size, jaxmarl_batched(size, steps, args.repeats))
 
+    single = args.single_steps
+    for obstacles in (0, OBSTACLES):
+        env = pursuit_bench.parallel_env(CONDITION, obstacles=obstacles)
+        report(f"pursuit-bench single, {obstacles} obstacles", 1, single_env(env, single, args.repeats))
+        rate = ours_batched("pymunk", 256, 400, args.repeats, obstacles)
+        report(f"pursuit-bench batched (pymunk), {obstacles} obstacles", 256, rate)
+
     for size in (16, 256):
         steps = max(10, 20_000 // size)
         report("Gymnasium make_vec, ours (batched core)", size, gymnasium_vector("ours", size, steps, args.repeats))
@@ -206,6 +215,16 @@ def main() -> None:
             "Gymnasium vector env vs SyncVectorEnv at 256 envs",
             best("Gymnasium make_vec, ours (batched core)", 256),
             best("Gymnasium SyncVectorEnv over single envs", 256),
+        ),
+        (
+            f"single env, no obstacles vs {OBSTACLES} (target <= 1.5)",
+            best("pursuit-bench single, 0 obstacles"),
+            best(f"pursuit-bench single, {OBSTACLES} obstacles"),
+        ),
+        (
+            f"batched at 256, no obstacles vs {OBSTACLES} (target <= 1.5)",
+            best("pursuit-bench batched (pymunk), 0 obstacles"),
+            best(f"pursuit-bench batched (pymunk), {OBSTACLES} obstacles"),
         ),
         (
             "numpy backend vs JaxMARL at 1024 envs",

@@ -52,6 +52,7 @@ _SUBMODULES = {
     "guidance",
     "gym_vector",
     "navigation",
+    "obstacles",
     "policies",
     "pretrained",
     "recording",

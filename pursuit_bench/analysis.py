@@ -14,6 +14,7 @@ neighbours of a point predict it exactly; about 0 or below: no organisation).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,9 +52,16 @@ class PredatorStates:
 
 
 def collect(
-    condition: str, agents: dict[str, Actor], *, episodes: int, seed: int, num_envs: int = 32
+    condition: str,
+    agents: dict[str, Actor],
+    *,
+    episodes: int,
+    seed: int,
+    num_envs: int = 32,
+    task_options: Mapping[str, Any] | None = None,
 ) -> dict[str, PredatorStates]:
-    """Play ``episodes`` by the paper's protocol; the states of every hierarchical predator."""
+    """Play ``episodes`` by the paper's protocol (in the task ``task_options`` make of the
+    condition: obstacles); the states of every hierarchical predator."""
     names = list(agents)
     predators = [i for i, n in enumerate(names[:-1]) if isinstance(agents[n], HierarchicalPredator)]
     steps: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
@@ -61,7 +69,17 @@ def collect(
     def on_step(obs: np.ndarray, actions: np.ndarray, done: np.ndarray) -> None:
         steps.append((obs.copy(), actions[:, :-1, 0].copy(), done.copy()))
 
-    run_episodes(condition, agents, episodes, seed=seed, num_envs=num_envs, epsilons={names[-1]: 0.1}, on_step=on_step)
+    epsilons = {names[-1]: 0.1}
+    run_episodes(
+        condition,
+        agents,
+        episodes,
+        seed=seed,
+        num_envs=num_envs,
+        epsilons=epsilons,
+        on_step=on_step,
+        task_options=task_options,
+    )
     obs = np.stack([s[0] for s in steps])  # (T, B, n, n_obs)
     modes = np.stack([s[1] for s in steps])  # (T, B, n_pred)
     done = np.stack([s[2] for s in steps])  # (T, B)

@@ -21,6 +21,20 @@ CHASE_COSTS: dict[str, float] = {"low": 0.01, "high": 0.1}
 #: Episode limit in steps: 30 s at dt = 0.1 s (paper 3.1). Reaching it *truncates* the episode.
 MAX_STEPS = 300
 MAX_PREDATORS = 3
+#: Most obstacles an arena may hold (docs/spec.md, obstacles).
+MAX_OBSTACLES = 8
+#: Obstacle radii allowed: from 0.1 (a full-speed step, 0.144, is then shorter than an agent's
+#: and an obstacle's radii together, so no disk passes through one in a step) to 0.25.
+OBSTACLE_RADII = (0.1, 0.25)
+#: Default obstacle radius: three times an agent's.
+OBSTACLE_RADIUS = 0.15
+#: Free gap kept between two obstacles and between an obstacle and a wall: wider than an agent
+#: (0.1), so every passage lets one through and no part of the arena is closed off.
+OBSTACLE_GAP = 0.15
+#: How crowded an arena may be: ``obstacles · (2 · obstacle_radius + OBSTACLE_GAP)²`` at most
+#: this. Placement then always succeeds (measured: it first fails above 1.69; 8 obstacles of the
+#: default radius give 1.62).
+MAX_CROWDING = 1.65
 
 
 @dataclass(frozen=True)
@@ -46,6 +60,12 @@ class TaskConfig:
     prey's 3.0, a predator's chase level 3.6); a predator is in chase mode, and pays the chase
     cost, in a step whose acceleration exceeds the stalk level (1.8, a norm above 0.5). The
     discrete task is this one restricted to its 24 (predator) or 12 (prey) points."""
+    obstacles: int = 0
+    """Static circular obstacles per arena, 0 to 8, placed afresh at every reset (docs/spec.md,
+    obstacles). 0 is the paper's empty arena, bit for bit. With obstacles every observation
+    ends with 12 range readings, and ``state()`` with the obstacles."""
+    obstacle_radius: float = OBSTACLE_RADIUS
+    """Radius of every obstacle, 0.1 to 0.25 (the arena is 2 across, an agent's radius 0.05)."""
 
     def __post_init__(self) -> None:
         if (
@@ -65,6 +85,18 @@ class TaskConfig:
             raise ValueError(f"wall_rule={self.wall_rule!r}: expected 'terminate' or 'contain'")
         if not isinstance(self.continuous, bool):
             raise ValueError(f"continuous={self.continuous!r}: expected True or False")
+        k = self.obstacles
+        if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= MAX_OBSTACLES:
+            raise ValueError(f"obstacles={k!r}: expected an integer from 0 to {MAX_OBSTACLES}")
+        r = self.obstacle_radius
+        low, high = OBSTACLE_RADII
+        if isinstance(r, bool) or not isinstance(r, (int, float)) or not low <= r <= high:
+            raise ValueError(f"obstacle_radius={r!r}: expected a number from {low} to {high}")
+        if k * (2 * r + OBSTACLE_GAP) ** 2 > MAX_CROWDING:
+            raise ValueError(
+                f"obstacles={k} of obstacle_radius={r}: no room for them with the gaps kept between "
+                f"them; expected obstacles * (2 * obstacle_radius + {OBSTACLE_GAP})**2 <= {MAX_CROWDING}"
+            )
 
     @property
     def n_agents(self) -> int:
@@ -96,10 +128,11 @@ def resolve_condition(condition: str | None = None, **options: object) -> TaskCo
     """Build a :class:`TaskConfig` from a condition name and/or explicit options.
 
     A condition fixes ``n_predators``, ``chase_cost`` and ``reward_sharing``; giving one of those
-    as well is an error (ambiguous). ``max_steps``, ``wall_rule`` and ``continuous`` may be set
-    with either.
+    as well is an error (ambiguous). ``max_steps``, ``wall_rule``, ``continuous``, ``obstacles``
+    and ``obstacle_radius`` may be set with either.
     """
     known = {"n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule", "continuous"}
+    known |= {"obstacles", "obstacle_radius"}
     unknown = set(options) - known
     if unknown:
         raise ValueError(f"unknown option(s) {sorted(unknown)}: expected some of {sorted(known)}")

@@ -12,6 +12,7 @@ import numpy as np
 
 from pursuit_bench import task
 from pursuit_bench.conditions import TaskConfig
+from pursuit_bench.obstacles import place_obstacles
 from pursuit_bench.world import Backend, Contacts, make_world
 
 #: Start layouts an arena draws from its generator at a time (see ``PursuitCore._draw_starts``).
@@ -47,44 +48,76 @@ class PursuitCore:
             raise ValueError(f"num_envs={num_arenas!r}: expected an integer >= 1")
         self.config = config
         self.num_arenas = num_arenas
-        self.world = make_world(backend, num_arenas, config.n_agents, wall_rule=config.wall_rule)
+        self.world = make_world(
+            backend, num_arenas, config.n_agents, wall_rule=config.wall_rule, obstacles=config.obstacles
+        )
         self.steps = np.zeros(num_arenas, dtype=np.int64)
         self._los = np.zeros((num_arenas, config.n_agents, 2))  # LOS at the current positions
-        # start layouts drawn ahead, per arena, with the generator they came from
-        self._starts: dict[int, tuple[np.random.Generator, list[np.ndarray]]] = {}
+        # start layouts (and their obstacles) drawn ahead, per arena, with the generator they came from
+        self._starts: dict[int, tuple[np.random.Generator, list[tuple[np.ndarray, np.ndarray]]]] = {}
+
+    @property
+    def obstacles(self) -> np.ndarray | None:
+        """(B, K, 3) every arena's obstacles (x, y, radius), or None in a task without them."""
+        return self.world.obstacles if self.config.obstacles else None
 
     def reset(
-        self, arenas: np.ndarray, rngs: list[np.random.Generator], positions: np.ndarray | None = None
+        self,
+        arenas: np.ndarray,
+        rngs: list[np.random.Generator],
+        positions: np.ndarray | None = None,
+        obstacles: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Start the given arenas afresh: positions drawn each from its own generator, or given
-        (``positions`` (len(arenas), n_agents, 2), checked by :func:`task.check_positions`).
-        Returns the observations of those arenas (len(arenas), n_agents, 6n-2)."""
+        """Start the given arenas afresh: positions (and obstacles) drawn each from its own
+        generator, or given (``positions`` (len(arenas), n_agents, 2), checked by
+        :func:`task.check_positions`; ``obstacles`` (len(arenas), K, 3) with them, taken as
+        they are). Returns the observations of those arenas (len(arenas), n_agents, n_obs)."""
         if positions is None:
-            starts = self._draw_starts(arenas, rngs)
+            starts, placed = self._draw_starts(arenas, rngs)
         else:
             starts = task.check_positions(positions, (len(arenas), self.config.n_agents, 2))
-        self.world.reset(arenas, starts)
+            placed = self._given_obstacles(obstacles, len(arenas)) if self.config.obstacles else None
+        self.world.reset(arenas, starts, placed)
         self.steps[arenas] = 0
-        obs, self._los[arenas] = task.observe(starts, np.zeros_like(starts))
+        obs, self._los[arenas] = task.observe(starts, np.zeros_like(starts), placed)
         return obs
 
-    def _draw_starts(self, arenas: np.ndarray, rngs: list[np.random.Generator]) -> np.ndarray:
-        """The next start layout of each arena. Each arena draws ``STARTS_AHEAD`` layouts at a
-        time from its own generator (one call instead of one per episode) and uses them in
-        order; a new generator (a reseed) discards what the old one drew."""
-        starts = np.empty((len(arenas), self.config.n_agents, 2))
+    def _given_obstacles(self, obstacles: np.ndarray | None, count: int) -> np.ndarray:
+        shape = (count, self.config.obstacles, 3)
+        arr = np.asarray(obstacles, dtype=np.float64) if obstacles is not None else None
+        if arr is None or arr.shape != shape or not np.isfinite(arr).all():
+            raise ValueError(f"obstacles: expected finite numbers of shape {shape} with the positions")
+        return arr
+
+    def _draw_starts(self, arenas: np.ndarray, rngs: list[np.random.Generator]) -> tuple[np.ndarray, np.ndarray | None]:
+        """The next start layout (and obstacles, in a task with them) of each arena. Each arena
+        draws ``STARTS_AHEAD`` layouts at a time from its own generator (one call instead of one
+        per episode), their obstacles after them, and uses them in order; a new generator (a
+        reseed) discards what the old one drew."""
+        config = self.config
+        starts = np.empty((len(arenas), config.n_agents, 2))
+        placed = np.empty((len(arenas), config.obstacles, 3))
         for k, (arena, rng) in enumerate(zip(arenas.tolist(), rngs, strict=True)):
             owner, ahead = self._starts.get(arena, (None, []))
             if owner is not rng or not ahead:
-                ahead = list(task.start_layouts(rng, self.config.n_agents, STARTS_AHEAD)[::-1])
+                layouts = task.start_layouts(rng, config.n_agents, STARTS_AHEAD)
+                if config.obstacles:
+                    around = place_obstacles(rng, layouts, config.obstacles, config.obstacle_radius)
+                else:
+                    around = np.empty((len(layouts), 0, 3))
+                ahead = list(zip(layouts, around, strict=True))[::-1]
                 self._starts[arena] = (rng, ahead)
-            starts[k] = ahead.pop()
-        return starts
+            starts[k], placed[k] = ahead.pop()
+        return starts, (placed if config.obstacles else None)
 
     def state(self) -> np.ndarray:
-        """(B, 4 n_agents) float32 global state: ``[x, y, vx, vy]`` per agent, world frame."""
+        """(B, 4 n_agents [+ 3 K]) float32 global state: ``[x, y, vx, vy]`` per agent, world
+        frame, then ``[x, y, radius]`` per obstacle in a task with obstacles."""
         w = self.world
-        return np.concatenate([w.positions, w.velocities], axis=-1).reshape(self.num_arenas, -1).astype(np.float32)
+        parts = [np.concatenate([w.positions, w.velocities], axis=-1).reshape(self.num_arenas, -1)]
+        if self.config.obstacles:
+            parts.append(w.obstacles.reshape(self.num_arenas, -1))
+        return np.concatenate(parts, axis=-1).astype(np.float32)
 
     def step(self, modes: np.ndarray, directions: np.ndarray) -> StepResult:
         """Advance every arena by one step; ``modes`` (B, n_predators), ``directions`` (B, n_agents)."""
@@ -100,7 +133,9 @@ class PursuitCore:
         contacts = self.world.step(acc)
         self.steps += 1
         world = self.world
-        done = task.finish_step(self.config, contacts, modes, self.steps, world.positions, world.velocities)
+        done = task.finish_step(
+            self.config, contacts, modes, self.steps, world.positions, world.velocities, self.obstacles
+        )
         self._los = done.los
         return StepResult(
             observations=done.observations,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -36,6 +36,11 @@ class Episodes:
     """(E, n_agents) distance travelled."""
     left_area: np.ndarray
     """(E, n_agents) bool: the agent touched a wall on the episode's last step."""
+    collisions: np.ndarray
+    """(E, n_agents) collisions with obstacles: steps on which the agent came to touch one it
+    had not touched on the step before (0 without obstacles)."""
+    contact_steps: np.ndarray
+    """(E, n_agents) steps that ended with the agent touching an obstacle."""
 
 
 def run_episodes(
@@ -51,6 +56,7 @@ def run_episodes(
     record: Callable[[int], bool] = lambda episode: True,
     on_step: Callable[[np.ndarray, np.ndarray, np.ndarray], None] | None = None,
     check: Callable[[], None] = lambda: None,
+    task_options: Mapping[str, Any] | None = None,
 ) -> Episodes:
     """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
     ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
@@ -58,15 +64,21 @@ def run_episodes(
     go into it, with the hierarchical predators' Q-values and V(s). ``on_step(obs, actions,
     done)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
     (B, n_agents, 2) and which arenas' episodes the step ended (B,). ``check()`` is called
-    before every step: the place to stop (by raising) when the caller was asked to."""
-    env = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend)
+    before every step: the place to stop (by raising) when the caller was asked to.
+    ``task_options``: task options beside the condition (``obstacles``, ``obstacle_radius``)."""
+    env = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend, **(task_options or {}))
     epsilons = epsilons or {}
     names, n_pred = env.agents, env.n_agents - 1
     obs, _ = env.reset(seed=seed)
-    traces = EpisodeTraces(env.core.world.positions, env.config.max_steps) if recorder is not None else None
+    traces = None
+    if recorder is not None:
+        traces = EpisodeTraces(env.core.world.positions, env.config.max_steps, env.core.obstacles)
     chase = np.zeros((env.num_envs, n_pred))
     travelled = np.zeros((env.num_envs, env.n_agents))
-    rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray, np.ndarray]] = []
+    touching = np.zeros((env.num_envs, env.n_agents), dtype=bool)
+    collisions = np.zeros((env.num_envs, env.n_agents))
+    contact = np.zeros((env.num_envs, env.n_agents))
+    rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     while len(rows) < episodes:
         check()
         actions = np.zeros((env.num_envs, env.n_agents, 2), dtype=np.int64)
@@ -86,6 +98,9 @@ def run_episodes(
             on_step(acted_on, actions, info["done"])
         travelled += np.hypot(*(info["positions"] - before).transpose(2, 0, 1))
         chase += actions[:, :-1, 0]
+        collisions += info["touching_obstacle"] & ~touching
+        contact += info["touching_obstacle"]
+        touching = info["touching_obstacle"] & ~info["done"][:, None]
         if traces is not None:
             traces.add_step(actions, rewards, info, q_values, values)
         for arena in np.flatnonzero(info["done"]):
@@ -98,12 +113,21 @@ def run_episodes(
                     chase[arena] / length,
                     travelled[arena].copy(),
                     info["left_area"][arena].copy(),
+                    collisions[arena].copy(),
+                    contact[arena].copy(),
                 )
             )
             chase[arena] = 0.0
             travelled[arena] = 0.0
+            collisions[arena] = 0.0
+            contact[arena] = 0.0
             if traces is not None and recorder is not None:
-                trace = traces.finish(int(arena), bool(truncated[arena, 0]), env.core.world.positions[arena])
+                trace = traces.finish(
+                    int(arena),
+                    bool(truncated[arena, 0]),
+                    env.core.world.positions[arena],
+                    env.core.world.obstacles[arena],
+                )
                 if len(rows) <= episodes and record(len(rows)):
                     recorder.log_episode(len(rows), trace)
     rows = rows[:episodes]
@@ -114,6 +138,8 @@ def run_episodes(
         chase_fraction=np.array([r[3] for r in rows]).reshape(len(rows), n_pred),
         distance=np.array([r[4] for r in rows]),
         left_area=np.array([r[5] for r in rows]).reshape(len(rows), len(names)),
+        collisions=np.array([r[6] for r in rows]).reshape(len(rows), len(names)),
+        contact_steps=np.array([r[7] for r in rows]).reshape(len(rows), len(names)),
     )
 
 
@@ -134,6 +160,8 @@ def evaluate_agents(
     backend: Backend = "pymunk",
     predator_kind: str | None = None,
     check: Callable[[], None] = lambda: None,
+    task_options: Mapping[str, Any] | None = None,
+    avoidance: bool = False,
 ) -> dict[str, Any]:
     """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
     learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
@@ -148,8 +176,14 @@ def evaluate_agents(
     and ``always_stalk``, their standard errors and every episode's return (``stderr``,
     ``episode_returns``, keyed alike); ``predator_kind`` names what the trained predators are (``hierarchical``,
     ``flat``, …; by default read from the first predator's ``kind``). ``check()`` is called
-    before every step (:func:`run_episodes`)."""
+    before every step (:func:`run_episodes`).
+
+    With obstacles (``task_options``), the baselines' lower layer avoids them as ``avoidance``
+    says (that of the trained predators), the scripted prey avoids them, and the result holds
+    ``obstacle_collisions`` and ``obstacle_contact_steps``: each agent's collisions and steps
+    in contact per episode, as trained (:class:`Episodes`)."""
     names = list(agents)
+    obstacles = bool((task_options or {}).get("obstacles"))
     predators, prey = names[:-1], names[-1]
     kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
     epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
@@ -165,13 +199,14 @@ def evaluate_agents(
             recorder=rec,
             backend=backend,
             check=check,
+            task_options=task_options,
         )
 
     trained = play(agents, recorder)
     panels = []
     for i, name in enumerate(predators):
-        chase = play({**agents, name: ScriptedAgent(name, AlwaysChase())})
-        stalk = play({**agents, name: ScriptedAgent(name, AlwaysStalk())})
+        chase = play({**agents, name: ScriptedAgent(name, AlwaysChase(avoidance=avoidance))})
+        stalk = play({**agents, name: ScriptedAgent(name, AlwaysStalk(avoidance=avoidance))})
         variants = {"trained": trained, "always_chase": chase, "always_stalk": stalk}
         panels.append(
             {
@@ -184,15 +219,13 @@ def evaluate_agents(
     captured = trained.captured
     prey_check = None
     if prey_epsilon is not None:  # a learning prey: greedy, and the scripted one in its place
-        greedy = run_episodes(condition, agents, episodes, seed=seed, num_envs=num_envs, backend=backend, check=check)
+        same = {"seed": seed, "num_envs": num_envs, "backend": backend, "check": check, "task_options": task_options}
+        greedy = run_episodes(condition, agents, episodes, **same)  # type: ignore[arg-type]
         fleeing = run_episodes(
             condition,
-            {**agents, prey: ScriptedAgent(prey, FleeingPrey())},
+            {**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))},
             episodes,
-            seed=seed,
-            num_envs=num_envs,
-            backend=backend,
-            check=check,
+            **same,  # type: ignore[arg-type]
         )
         prey_check = {
             name: {
@@ -217,4 +250,13 @@ def evaluate_agents(
         "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
         "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon},
         "prey_check": prey_check,
+        **(
+            {
+                "task_options": dict(task_options or {}),
+                "obstacle_collisions": dict(zip(names, trained.collisions.mean(axis=0).tolist(), strict=True)),
+                "obstacle_contact_steps": dict(zip(names, trained.contact_steps.mean(axis=0).tolist(), strict=True)),
+            }
+            if obstacles
+            else {}
+        ),
     }

@@ -25,7 +25,7 @@ def analyze_run(folder: Path, config: TrainConfig, agents: dict[str, Any], episo
     """Play ``episodes`` evaluation episodes with ``agents`` and write into ``folder``: fig3.png,
     modes.png, analysis.rrd and analysis.json (last: it says the set is complete). Returns the
     analysis by predator; ValueError if the predators are not hierarchical."""
-    states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed)
+    states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed, task_options=config.task_options)
     if not states:
         raise ValueError(f"{folder}: its predators are {config.predator}, not hierarchical: nothing to analyse")
     result, embeddings = analysis.analyse(states, seed)
@@ -72,7 +72,13 @@ def analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> dict[str, Any
             agents = runs.load_agents(folder)
         except ValueError:
             continue  # not trained yet
-        states = analysis.collect(config.condition, agents, episodes=episodes, seed=seed)  # type: ignore[arg-type]
+        states = analysis.collect(
+            config.condition,
+            agents,  # type: ignore[arg-type]
+            episodes=episodes,
+            seed=seed,
+            task_options=config.task_options,
+        )
         condition = CONDITIONS[config.condition]
         cost = "low" if condition.chase_cost < 0.05 else "high"
         distance = np.concatenate([s.distance for s in states.values()])

@@ -57,7 +57,7 @@ class PursuitVectorEnv(VectorEnv):
             raise ValueError(f"num_envs={num_envs!r}: expected an integer >= 1")
         self._vec = VectorPursuitEnv(num_envs, condition, backend=backend, **options)  # type: ignore[arg-type]
         names = self._vec.agents
-        self._opponents = resolve_opponents(agent, names, opponents)
+        self._opponents = resolve_opponents(agent, names, opponents, self._vec.config.obstacles > 0)
         self.agent, self.num_envs = agent, num_envs
         self._index = names.index(agent)
         self.single_observation_space = self._vec.single_observation_spaces[agent]

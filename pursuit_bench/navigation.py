@@ -7,19 +7,27 @@ position (u, v), prey velocity (u, v), …]`` in the predator's line-of-sight (L
 - :func:`pure_pursuit`: always straight at the prey (k = 0), for comparison.
 - :func:`constant_bearing_angle`: the classic constant-bearing course
   ``β = arcsin(|v_t| sin α / |v_p|)`` (Ghose et al. 2006), which parallel navigation approximates.
+- :func:`avoid`: obstacle avoidance on the range readings (a task with obstacles): keep the
+  chosen direction unless something solid is closer than :data:`SAFETY_DISTANCE` along it, then
+  take the nearest free direction. :func:`navigate` is the lower layer of the hierarchical
+  predator and of the scripted baselines: parallel navigation, with or without avoidance.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from pursuit_bench.task import ACCEL_CHASE, ACCEL_STALK, CHASE, DIRECTION_STEP
+from pursuit_bench.obstacles import RANGE_CAP
+from pursuit_bench.task import ACCEL_CHASE, ACCEL_STALK, CHASE, DIRECTION_STEP, N_DIRECTIONS
 from pursuit_bench.world import DAMPING, DT
 
 #: Directions on the approaching side, within ±90° of the LOS (paper 2.4).
 APPROACH_DIRECTIONS = np.array([9, 10, 11, 0, 1, 2, 3])
 #: Two predicted changes of φ closer than this (radians) count as a tie.
 TIE_TOLERANCE = 1e-12
+#: A direction is blocked for :func:`avoid` when its range reading is below this: a little less
+#: than two steps at a predator's top speed (0.144 per step).
+SAFETY_DISTANCE = 0.25
 
 _OWN_VEL = slice(2, 4)
 _PREY_REL = slice(6, 8)
@@ -71,3 +79,27 @@ def constant_bearing_angle(target_speed: float, pursuer_speed: float, alpha: flo
         raise ValueError(f"pursuer_speed={pursuer_speed!r}: expected a speed > 0")
     ratio = abs(target_speed) * np.sin(alpha) / pursuer_speed
     return float(np.arcsin(ratio)) if abs(ratio) <= 1 else float("nan")
+
+
+def avoid(directions: np.ndarray, ranges: np.ndarray, safety: float = SAFETY_DISTANCE) -> np.ndarray:
+    """Obstacle avoidance: each direction index (...) kept when its range reading (``ranges``
+    (..., 12), the observation's last 12 entries in a task with obstacles) is at least
+    ``safety``; otherwise the free direction (reading >= ``safety``) fewest 30° steps away from
+    it, ties to the longer reading, then to the lower index; with none free, the direction with
+    the longest reading. A free direction is always taken when there is one."""
+    directions = np.asarray(directions)
+    ranges = np.asarray(ranges, dtype=np.float64)
+    turn = np.abs(np.arange(N_DIRECTIONS) - directions[..., None]) % N_DIRECTIONS
+    turn = np.minimum(turn, N_DIRECTIONS - turn)
+    free = ranges >= safety
+    cost = np.where(free, turn - 0.5 * np.clip(ranges, 0.0, RANGE_CAP) / RANGE_CAP, np.inf)
+    return np.where(free.any(axis=-1), np.argmin(cost, axis=-1), np.argmax(ranges, axis=-1))
+
+
+def navigate(observations: np.ndarray, modes: np.ndarray | int, *, avoidance: bool = False) -> np.ndarray:
+    """The lower layer: :func:`parallel_navigation`, then with ``avoidance`` :func:`avoid` on the
+    observations' range readings (their last 12 entries: only in a task with obstacles)."""
+    directions = parallel_navigation(observations, modes)
+    if not avoidance:
+        return directions
+    return avoid(directions, np.asarray(observations)[..., -N_DIRECTIONS:])

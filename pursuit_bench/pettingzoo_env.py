@@ -13,7 +13,7 @@ from pettingzoo.utils import parallel_to_aec
 
 from pursuit_bench import task
 from pursuit_bench.agent_spaces import POSITION_BOUND, VELOCITY_BOUND, agent_spaces
-from pursuit_bench.conditions import TaskConfig, resolve_condition
+from pursuit_bench.conditions import OBSTACLE_RADII, TaskConfig, resolve_condition
 from pursuit_bench.core import PursuitCore
 from pursuit_bench.render import draw_arena
 from pursuit_bench.world import Backend
@@ -102,8 +102,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
 
     ## Observation Space
 
-    ``Box(float32, (6n - 2,))`` per agent for n agents in all (10, 16, 22). (u, v) is the
-    observing agent's LOS frame: u along the LOS, v to its left.
+    ``Box(float32, (6n - 2,))`` per agent for n agents in all (10, 16, 22), 12 more with
+    obstacles. (u, v) is the observing agent's LOS frame: u along the LOS, v to its left.
 
     | index | observation |
     |---|---|
@@ -112,9 +112,12 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     | 4 + 6j, 5 + 6j | other agent j: x, y |
     | 6 + 6j, 7 + 6j | other agent j: position relative to self (u, v) |
     | 8 + 6j, 9 + 6j | other agent j: velocity (u, v) |
+    | 6n - 2 + k, k = 0..11 | with obstacles: range reading along direction k |
 
     Other agents in order: for a predator the prey, then the other predators by index; for the
-    prey the predators by increasing distance.
+    prey the predators by increasing distance. A range reading is how far the agent's centre can
+    travel along direction k (the action's, in the LOS frame) before its disk touches an obstacle
+    or a wall, 0 when touching, capped at 1.
 
     ## Rewards
 
@@ -128,7 +131,15 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
 
     ## Starting State
 
-    Positions uniform in ``[-0.5, 0.5]²`` with no two disks overlapping; velocities zero.
+    Positions uniform in ``[-0.5, 0.5]²`` with no two disks overlapping; velocities zero. With
+    obstacles, drawn after the positions from the same generator: centres uniform where each
+    keeps a gap of 0.15 from the walls and from every other obstacle, every agent's disk 0.05
+    clear of them. ``env.obstacles`` is this episode's, (K, 3) rows of x, y, radius.
+
+    ## Obstacles
+
+    ``obstacles=K`` static circles of radius ``obstacle_radius`` stand in the arena. Agents
+    collide with them as solid, frictionless, inelastic bodies: no reward, no episode end.
 
     ## Episode End
 
@@ -147,6 +158,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
     - ``wall_rule``: ``"terminate"`` (default, the paper) or ``"contain"`` (walls stop the disk,
       -1 per step in contact, the episode goes on);
     - ``continuous``: ``False`` (default, the paper) or ``True`` (acceleration actions, above);
+    - ``obstacles`` (0–8, default 0: the paper's empty arena, unchanged) and ``obstacle_radius``
+      (0.1–0.25, default 0.15); at most ``K (2 r + 0.15)² <= 1.65``;
     - ``render_mode``: ``None`` or ``"rgb_array"``;
     - ``backend``: ``"pymunk"`` (default, the reference) or ``"numpy"``.
 
@@ -176,6 +189,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         max_steps: int | None = None,
         wall_rule: str | None = None,
         continuous: bool = False,
+        obstacles: int = 0,
+        obstacle_radius: float | None = None,
         render_mode: str | None = None,
         backend: Backend = "pymunk",
     ) -> None:
@@ -187,6 +202,8 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
             max_steps=max_steps,
             wall_rule=wall_rule,
             continuous=continuous,
+            obstacles=obstacles,
+            obstacle_radius=obstacle_radius,
         )
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode={render_mode!r}: expected None or 'rgb_array'")
@@ -199,10 +216,12 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         self._agent_set = set(self.possible_agents)
         self._parse_plan = [(a, i < self._n_predators) for i, a in enumerate(self.possible_agents)]
         self._observation_spaces, self._action_spaces = agent_spaces(self.config)
-        state_bound = np.array([POSITION_BOUND] * 2 + [VELOCITY_BOUND] * 2, dtype=np.float32)
-        self.state_space = spaces.Box(
-            -np.tile(state_bound, self.config.n_agents), np.tile(state_bound, self.config.n_agents), dtype=np.float32
+        agent_bound = [POSITION_BOUND] * 2 + [VELOCITY_BOUND] * 2
+        obstacle_bound = [POSITION_BOUND] * 2 + [OBSTACLE_RADII[1]]
+        state_bound = np.array(
+            agent_bound * self.config.n_agents + obstacle_bound * self.config.obstacles, dtype=np.float32
         )
+        self.state_space = spaces.Box(-state_bound, state_bound, dtype=np.float32)
         self.np_random, self.np_random_seed = seeding.np_random()
 
     @functools.cache  # noqa: B019 - PettingZoo requires the same object
@@ -219,14 +238,17 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         """Start a new episode.
 
         ``options={"positions": array (n_agents, 2)}`` places the agents (in ``possible_agents``
-        order) instead of drawing them; other keys are ignored.
+        order) instead of drawing them, and in a task with obstacles ``"obstacles": array
+        (K, 3)`` (x, y, radius) must come with them; other keys are ignored.
         """
         if seed is not None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         positions = (options or {}).get("positions")
+        obstacles = (options or {}).get("obstacles")
         if positions is not None:
             positions = task.check_positions(positions, (self.config.n_agents, 2))[None]
-        obs = self._core.reset(np.array([0]), [self.np_random], positions)[0]
+            obstacles = None if obstacles is None else np.asarray(obstacles, dtype=np.float64)[None]
+        obs = self._core.reset(np.array([0]), [self.np_random], positions, obstacles)[0]
         self.agents = list(self.possible_agents)
         no = np.zeros((1, self.config.n_agents), dtype=bool)
         z = task.as_complex(self._core.world.positions)
@@ -285,14 +307,20 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         return obs, rewards, dict.fromkeys(agents, terminated), dict.fromkeys(agents, truncated), infos
 
     def state(self) -> np.ndarray:
-        """Global state, float32 ``[x, y, vx, vy]`` per agent in ``possible_agents`` order."""
+        """Global state, float32 ``[x, y, vx, vy]`` per agent in ``possible_agents`` order, then
+        ``[x, y, radius]`` per obstacle."""
         return self._core.state()[0]
+
+    @property
+    def obstacles(self) -> np.ndarray:
+        """(K, 3) this episode's obstacles, rows of x, y, radius (K = 0 without obstacles)."""
+        return self._core.world.obstacles[0].copy()
 
     def render(self) -> np.ndarray | None:
         """An RGB frame (uint8, 400×400×3) in ``rgb_array`` mode; None when render_mode is None."""
         if self.render_mode is None:
             return None
-        return draw_arena(self._core.world.positions[0])
+        return draw_arena(self._core.world.positions[0], obstacles=self._core.world.obstacles[0])
 
     def close(self) -> None:
         pass
@@ -305,6 +333,8 @@ ENV_OPTIONS = (
     "max_steps",
     "wall_rule",
     "continuous",
+    "obstacles",
+    "obstacle_radius",
     "render_mode",
     "backend",
 )

@@ -3,7 +3,12 @@
 - :class:`AlwaysChase`, :class:`AlwaysStalk`: a predator at a fixed mode, the direction from
   parallel navigation (the paper's baselines, section 3.4).
 - :class:`PurePursuitPredator`: a fixed mode, always straight at the prey (for comparison).
-- :class:`FleeingPrey`: flees the nearest predator while keeping off the walls.
+- :class:`FleeingPrey`: flees the nearest predator while keeping off the walls (and, in a task
+  with obstacles, off the obstacles).
+
+In a task with obstacles a predator's lower layer may avoid them (``avoidance=True``,
+:func:`pursuit_bench.navigation.navigate`); the prey must be told that its observations carry
+range readings (``obstacles=True``).
 """
 
 from __future__ import annotations
@@ -12,7 +17,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from pursuit_bench.navigation import parallel_navigation, pure_pursuit
+from pursuit_bench.navigation import SAFETY_DISTANCE, avoid, navigate, pure_pursuit
 from pursuit_bench.task import ACCEL_PREY, CHASE, N_DIRECTIONS, STALK, rotate_by_direction
 from pursuit_bench.world import DAMPING, DT, HALF_SIZE, RADIUS
 
@@ -26,6 +31,9 @@ class Policy(Protocol):
 class _FixedModePredator:
     mode: int
 
+    def __init__(self, *, avoidance: bool = False) -> None:
+        self.avoidance = avoidance
+
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
         """(B, 2) actions ``(mode, direction)`` for (B, obs) observations."""
         directions = self._directions(np.asarray(observations))
@@ -35,41 +43,53 @@ class _FixedModePredator:
         return self.act_batch(np.asarray(observation)[None])[0]
 
     def _directions(self, observations: np.ndarray) -> np.ndarray:
-        return parallel_navigation(observations, self.mode)
+        return navigate(observations, self.mode, avoidance=self.avoidance)
 
 
 class AlwaysChase(_FixedModePredator):
-    """Chase mode on every step; direction by parallel navigation."""
+    """Chase mode on every step; direction by parallel navigation (with ``avoidance``, around
+    obstacles)."""
 
     mode = CHASE
 
 
 class AlwaysStalk(_FixedModePredator):
-    """Stalk mode on every step; direction by parallel navigation."""
+    """Stalk mode on every step; direction by parallel navigation (with ``avoidance``, around
+    obstacles)."""
 
     mode = STALK
 
 
 class PurePursuitPredator(_FixedModePredator):
-    """A fixed mode (chase by default), always heading straight at the prey."""
+    """A fixed mode (chase by default), always heading straight at the prey (with
+    ``avoidance``, around obstacles)."""
 
-    def __init__(self, mode: int = CHASE) -> None:
+    def __init__(self, mode: int = CHASE, *, avoidance: bool = False) -> None:
+        super().__init__(avoidance=avoidance)
         self.mode = mode
 
     def _directions(self, observations: np.ndarray) -> np.ndarray:
-        return pure_pursuit(observations)
+        directions = pure_pursuit(observations)
+        return avoid(directions, observations[..., -N_DIRECTIONS:]) if self.avoidance else directions
 
 
 class FleeingPrey:
     """Picks the direction whose predicted next position is farthest from the nearest predator's
-    predicted position, minus a penalty for coming within ``wall_margin`` of a wall."""
+    predicted position, minus a penalty for coming within ``wall_margin`` of a wall. With
+    ``obstacles`` (its observations end with range readings) also minus the same weight times
+    how far a direction's reading falls short of the avoidance rule's safety distance."""
 
-    def __init__(self, wall_margin: float = 0.25, wall_weight: float = 10.0) -> None:
+    def __init__(self, wall_margin: float = 0.25, wall_weight: float = 10.0, *, obstacles: bool = False) -> None:
         self.wall_margin = wall_margin
         self.wall_weight = wall_weight
+        self.obstacles = obstacles
 
     def act_batch(self, observations: np.ndarray) -> np.ndarray:
         obs = np.asarray(observations, dtype=np.float64)
+        shortfall = np.zeros((len(obs), N_DIRECTIONS))
+        if self.obstacles:
+            obs, ranges = obs[:, :-N_DIRECTIONS], obs[:, -N_DIRECTIONS:]
+            shortfall = np.clip(SAFETY_DISTANCE - ranges, 0.0, None)
         own = obs[:, 0:2]
         nearest = obs[:, 4:6]
         los = nearest - own
@@ -87,7 +107,7 @@ class FleeingPrey:
         closest = np.sqrt((gap * gap).sum(-1)).min(-1)
         safe = HALF_SIZE - RADIUS - self.wall_margin
         intrusion = np.clip(np.abs(own_next) - safe, 0.0, None).sum(-1)
-        return np.argmax(closest - self.wall_weight * intrusion, axis=1)
+        return np.argmax(closest - self.wall_weight * (intrusion + shortfall), axis=1)
 
     def act(self, observation: np.ndarray) -> int:
         return int(self.act_batch(np.asarray(observation)[None])[0])

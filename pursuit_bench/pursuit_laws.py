@@ -13,6 +13,7 @@ and pure pursuit.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -31,10 +32,16 @@ REFERENCES = {"always_chase": AlwaysChase, "always_stalk": AlwaysStalk, "pure_pu
 
 
 def pursuits(
-    condition: str, agents: dict[str, Actor], episodes: int, seed: int, prey_epsilon: float | None = 0.1
+    condition: str,
+    agents: dict[str, Actor],
+    episodes: int,
+    seed: int,
+    prey_epsilon: float | None = 0.1,
+    task_options: Mapping[str, Any] | None = None,
 ) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
     """Play ``episodes`` episodes (predators greedy, the prey ε-greedy as in the paper's
-    evaluation) and return every predator's pursuits: (pursuer, prey) position arrays (T, 2)."""
+    evaluation; ``task_options``: obstacles) and return every predator's pursuits: (pursuer,
+    prey) position arrays (T, 2)."""
     names = list(agents)
     predators, prey = names[:-1], names[-1]
     tracks: dict[int, list[np.ndarray]] = {}
@@ -51,7 +58,16 @@ def pursuits(
                         found[name].append((track[:, i], track[:, -1]))
 
     epsilons = {prey: prey_epsilon} if prey_epsilon is not None else {}
-    run_episodes(condition, agents, episodes, seed=seed, num_envs=min(16, episodes), epsilons=epsilons, on_step=on_step)
+    run_episodes(
+        condition,
+        agents,
+        episodes,
+        seed=seed,
+        num_envs=min(16, episodes),
+        epsilons=epsilons,
+        on_step=on_step,
+        task_options=task_options,
+    )
     return found
 
 
@@ -102,19 +118,27 @@ def examples(found: list[tuple[np.ndarray, np.ndarray]], count: int = 3) -> list
 
 
 def analyse(
-    condition: str, agents: dict[str, Actor], kind: str, episodes: int, seed: int, references: bool = True
+    condition: str,
+    agents: dict[str, Actor],
+    kind: str,
+    episodes: int,
+    seed: int,
+    references: bool = True,
+    task_options: Mapping[str, Any] | None = None,
+    avoidance: bool = False,
 ) -> dict[str, Any]:
     """law.json's content for one set of agents: per predator of ``kind`` (and, with
-    ``references``, per scripted reference predator in the predators' places) the fits."""
+    ``references``, per scripted reference predator in the predators' places, their lower
+    layer avoiding obstacles as ``avoidance`` says) the fits; ``task_options``: obstacles."""
     predators = list(CONDITIONS[condition].agent_names[:-1])
     result: dict[str, Any] = {"condition": condition, "episodes": episodes, "seed": seed, "dt": DT, "kinds": {}}
-    found = pursuits(condition, agents, episodes, seed)
+    found = pursuits(condition, agents, episodes, seed, task_options=task_options)
     result["kinds"][kind] = {name: fit_pursuits(found[name]) for name in predators}
     result["examples"] = {kind: examples(found[predators[0]])}
     if references:
         for name, policy in REFERENCES.items():
-            scripted = {**agents, **{p: ScriptedAgent(p, policy()) for p in predators}}
-            found = pursuits(condition, scripted, episodes, seed)
+            scripted = {**agents, **{p: ScriptedAgent(p, policy(avoidance=avoidance)) for p in predators}}
+            found = pursuits(condition, scripted, episodes, seed, task_options=task_options)
             result["kinds"][name] = {p: fit_pursuits(found[p]) for p in predators}
     return result
 

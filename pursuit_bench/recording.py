@@ -7,7 +7,8 @@ that scrubbing it plays them one after another (the file opens on it).
 
 Entities (``recordings/README.md`` says the same for users):
 
-- ``arena/walls``: the arena's square (static); ``arena/agents/<agent>``: each disk at its true
+- ``arena/walls``: the arena's square (static); ``arena/obstacles``: the episode's obstacles as
+  grey disks (logged at its first step; they stand still); ``arena/agents/<agent>``: each disk at its true
   radius, each predator its own warm colour (bright and larger while it chases, dark while it stalks),
   the prey blue; ``arena/trails/<agent>``: the last 15 positions.
 - ``modes/<predator>``: the mode as a state (stalk/chase), logged at every switch.
@@ -48,6 +49,7 @@ TRAIL_LENGTH = 15
 CHASE_RADIUS = 1.6 * RADIUS
 #: Walls in light grey: the viewer's background is dark (the paper's black square would vanish).
 WALL_RGB = (200, 200, 200)
+OBSTACLE_RGB = (140, 140, 140)
 #: The reward, mode and value views show this much time up to the cursor: about one episode.
 WINDOW_SECONDS = 30.0
 APPLICATION_ID = "pursuit_bench"
@@ -81,6 +83,8 @@ class EpisodeTrace:
     is not a hierarchical learner."""
     values: np.ndarray | None = None
     """(T, n_predators) the predators' V(s); NaN likewise."""
+    obstacles: np.ndarray | None = None
+    """(K, 3) the episode's obstacles (x, y, radius), or None in a task without them."""
 
     @property
     def length(self) -> int:
@@ -99,12 +103,13 @@ class EpisodeTraces:
 
     FIELDS = ("positions", "modes", "rewards", "wall", "captured", "q_values", "values")
 
-    def __init__(self, start_positions: np.ndarray, max_steps: int) -> None:
+    def __init__(self, start_positions: np.ndarray, max_steps: int, obstacles: np.ndarray | None = None) -> None:
         self._ring: dict[str, np.ndarray] = {}
         self._size = max_steps
         self._now = 0  # steps added so far
         self._start = np.zeros(len(start_positions), dtype=np.int64)  # step each running episode began
         self._initial = start_positions.copy()
+        self._obstacles = None if obstacles is None else obstacles.copy()  # (B, K, 3) of the running episodes
 
     def add(
         self,
@@ -140,8 +145,11 @@ class EpisodeTraces:
             info["positions"], actions[:, :-1, 0], rewards, info["left_area"], info["touching_prey"], q_values, values
         )
 
-    def finish(self, arena: int, truncated: bool, next_start: np.ndarray) -> EpisodeTrace:
-        """The episode that arena ``arena`` just ended; its next episode starts at ``next_start``."""
+    def finish(
+        self, arena: int, truncated: bool, next_start: np.ndarray, next_obstacles: np.ndarray | None = None
+    ) -> EpisodeTrace:
+        """The episode that arena ``arena`` just ended; its next episode starts at ``next_start``
+        (among ``next_obstacles`` (K, 3), in a task with obstacles)."""
         rows = np.arange(self._start[arena], self._now) % self._size
         taken = {name: ring[rows, arena] for name, ring in self._ring.items()}
         trace = EpisodeTrace(
@@ -153,9 +161,12 @@ class EpisodeTraces:
             truncated=truncated,
             q_values=taken.get("q_values"),
             values=taken.get("values"),
+            obstacles=None if self._obstacles is None else self._obstacles[arena].copy(),
         )
         self._start[arena] = self._now
         self._initial[arena] = next_start
+        if self._obstacles is not None and next_obstacles is not None:
+            self._obstacles[arena] = next_obstacles
         return trace
 
 
@@ -278,7 +289,8 @@ class Recorder:
 
     def _log_static(self, config: dict[str, Any]) -> None:
         s = self._stream
-        _log_arena(s, ("agents", "trails"))
+        _log_arena(s, ("agents", "trails", "obstacles"))
+        s.log("arena/obstacles", rr.Points2D.from_fields(colors=[_rgba(OBSTACLE_RGB)]), static=True)
         for name in self.names:
             color = _rgba(agent_rgb(name))
             if name in self.predators:  # colour and size go with each row (mode): static ones would override them
@@ -321,6 +333,12 @@ class Recorder:
         every = _rows(lengths + 1)
         after = _rows(lengths, first=1)  # rewards arrive after each step
         before = _rows(lengths)  # decisions are taken before it
+        placed = [t.obstacles for t in traces if t.obstacles is not None]
+        if placed:  # each episode's obstacles at its first step: they stand until the next episode's
+            starts = (np.arange(len(traces)), np.zeros(len(traces), dtype=np.int64))
+            disks = np.concatenate(placed)
+            columns = rr.Points2D.columns(positions=disks[:, :2], radii=disks[:, 2].astype(np.float32))
+            self._send("arena/obstacles", starts, columns.partition([len(p) for p in placed]))
         for i, name in enumerate(self.names):
             paths = [t.positions[:, i] for t in traces]
             if i < len(self.predators):  # a predator is drawn bright and larger while it chases
@@ -451,7 +469,9 @@ class RecordEpisodes(BaseParallelWrapper):
 
     def reset(self, seed: int | None = None, options: dict[str, Any] | None = None) -> Any:
         result = self.env.reset(seed=seed, options=options)
-        self._traces = EpisodeTraces(self._base._core.world.positions, self._base.config.max_steps)
+        self._traces = EpisodeTraces(
+            self._base._core.world.positions, self._base.config.max_steps, self._base._core.obstacles
+        )
         return result
 
     def step(self, actions: dict[str, Any]) -> Any:

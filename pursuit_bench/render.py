@@ -27,11 +27,13 @@ def dimmed(rgb: tuple[int, int, int], factor: float = 0.45) -> tuple[int, int, i
 
 WALL_RGB = (0, 0, 0)
 BACKGROUND_RGB = (255, 255, 255)
+OBSTACLE_RGB = (120, 120, 120)
 
 
-def draw_arena(positions: np.ndarray, size: int = 400) -> np.ndarray:
-    """(size, size, 3) uint8 frame of one arena: black square walls, predators as red disks and
-    the prey (last agent) as a blue disk, drawn at their true radius. ``positions`` (n_agents, 2)."""
+def draw_arena(positions: np.ndarray, size: int = 400, obstacles: np.ndarray | None = None) -> np.ndarray:
+    """(size, size, 3) uint8 frame of one arena: black square walls, grey obstacles
+    (``obstacles`` (K, 3) rows of x, y, radius), predators as red disks and the prey (last agent)
+    as a blue disk, drawn at their true radius. ``positions`` (n_agents, 2)."""
     frame = np.empty((size, size, 3), dtype=np.uint8)
     frame[:] = BACKGROUND_RGB
     view = HALF_SIZE * 1.05  # a margin around the walls
@@ -44,6 +46,8 @@ def draw_arena(positions: np.ndarray, size: int = 400) -> np.ndarray:
     frame[lo - border : hi + border, hi : hi + border] = WALL_RGB
     centres = (np.arange(size) + 0.5) / scale - view  # pixel centres in world units
     xs, ys = np.meshgrid(centres, -centres)  # image rows go down, y goes up
+    for x, y, radius in np.zeros((0, 3)) if obstacles is None else np.asarray(obstacles):
+        frame[(xs - x) ** 2 + (ys - y) ** 2 <= radius**2] = OBSTACLE_RGB
     for i, (x, y) in enumerate(np.asarray(positions)):
         inside = (xs - x) ** 2 + (ys - y) ** 2 <= RADIUS**2
         frame[inside] = PREY_RGB if i == len(positions) - 1 else PREDATOR_RGB

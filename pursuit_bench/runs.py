@@ -17,7 +17,6 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.files import RunBusy as RunBusy  # the lock lives in files.py: no torch, quick refusals
 from pursuit_bench.files import atomic_write_text
 from pursuit_bench.files import locked as locked
@@ -133,7 +132,7 @@ def load_agents(
     folder = Path(folder)
     config, _ = read_config(folder)
     state = state if state is not None else load_checkpoint(folder)
-    _, (agents,) = build_agents([config], [obs_size(len(CONDITIONS[config.condition].agent_names))])
+    _, (agents,) = build_agents([config], [obs_size(config.task.n_agents, config.obstacles > 0)])
     load_agents_state(agents, state, config.condition)
     return agents
 

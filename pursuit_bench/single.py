@@ -13,21 +13,25 @@ from pursuit_bench.pettingzoo_env import PursuitParallelEnv, as_continuous
 from pursuit_bench.policies import AlwaysChase, FleeingPrey, Policy
 
 
-def default_opponent(agent: str) -> Policy:
-    """The scripted stand-in for an agent: always-chase predators, a fleeing prey."""
-    return FleeingPrey() if agent.startswith("prey") else AlwaysChase()
+def default_opponent(agent: str, obstacles: bool = False) -> Policy:
+    """The scripted stand-in for an agent: always-chase predators, a fleeing prey; in a task
+    with ``obstacles`` both steer around them."""
+    return FleeingPrey(obstacles=obstacles) if agent.startswith("prey") else AlwaysChase(avoidance=obstacles)
 
 
-def resolve_opponents(agent: str, agents: list[str], opponents: Mapping[str, Policy] | None) -> dict[str, Policy]:
+def resolve_opponents(
+    agent: str, agents: list[str], opponents: Mapping[str, Policy] | None, obstacles: bool = False
+) -> dict[str, Policy]:
     """The policy of every agent but ``agent``: the given ones, :func:`default_opponent` for the
-    rest; ValueError for an unknown learning agent or an opponent that is not another agent."""
+    rest (``obstacles``: the task has some); ValueError for an unknown learning agent or an
+    opponent that is not another agent."""
     if agent not in agents:
         raise ValueError(f"agent={agent!r}: expected one of {agents}")
     given = dict(opponents or {})
     strangers = sorted(set(given) - set(agents) | ({agent} & set(given)))
     if strangers:
         raise ValueError(f"opponents for {strangers}: expected other agents of {agents}")
-    return {a: given.get(a) or default_opponent(a) for a in agents if a != agent}
+    return {a: given.get(a) or default_opponent(a, obstacles) for a in agents if a != agent}
 
 
 class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
@@ -57,7 +61,7 @@ class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
         **options: Any,
     ) -> None:
         self._env = PursuitParallelEnv(condition, render_mode=render_mode, **options)
-        self.opponents = resolve_opponents(agent, self._env.possible_agents, opponents)
+        self.opponents = resolve_opponents(agent, self._env.possible_agents, opponents, self._env.config.obstacles > 0)
         self.agent = agent
         self.render_mode = render_mode
         self.observation_space = self._env.observation_space(agent)
@@ -82,6 +86,11 @@ class PursuitSingleAgentEnv(gym.Env[np.ndarray, Any]):
         self._last_obs = obs
         a = self.agent
         return obs[a], rewards[a], terminated[a], truncated[a], infos[a]
+
+    @property
+    def obstacles(self) -> np.ndarray:
+        """(K, 3) this episode's obstacles, rows of x, y, radius."""
+        return self._env.obstacles
 
     def render(self) -> np.ndarray | None:
         return self._env.render()

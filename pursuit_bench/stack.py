@@ -200,6 +200,8 @@ def evaluate_into(
             backend=config.backend,
             predator_kind=predator_kind or config.predator,
             check=check,
+            task_options=config.task_options,
+            avoidance=config.avoids,
         )
         result.update({**about, "training": config.to_dict()})
         if recorder is not None:

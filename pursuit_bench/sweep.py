@@ -27,7 +27,7 @@ from typing import Any
 
 from pursuit_bench import runs
 from pursuit_bench.agents.config import QUICK, AgentConfig
-from pursuit_bench.conditions import CHASE_COSTS, CONDITIONS
+from pursuit_bench.conditions import CHASE_COSTS, CONDITIONS, OBSTACLE_RADIUS, TaskConfig
 from pursuit_bench.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.train import TrainConfig
 
@@ -66,6 +66,12 @@ class SweepPlan:
     keep_checkpoints: tuple[int, ...] = ()
     """Episode counts at which every run keeps its checkpoint (``checkpoint-epN.pt``), each
     evaluated like the final one into ``eval-epN.json``: learning against budget."""
+    obstacles: int = 0
+    """Obstacles per arena in every run (0: the paper's empty arena)."""
+    obstacle_radius: float = OBSTACLE_RADIUS
+    """Radius of every obstacle."""
+    avoidance: bool = True
+    """With obstacles: the predators' lower layer avoids them (``TrainConfig.avoidance``)."""
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.conditions if c not in CONDITIONS]
@@ -76,6 +82,7 @@ class SweepPlan:
         kinds = ("hierarchical", "flat", "always_chase", "always_stalk")
         if not self.predators or any(p not in kinds for p in self.predators):
             raise ValueError(f"predators={list(self.predators)!r}: expected some of {', '.join(kinds)}")
+        TaskConfig(obstacles=self.obstacles, obstacle_radius=self.obstacle_radius)  # refuses bad obstacle options
         if any(
             isinstance(n, bool) or not isinstance(n, int) or not 1 <= n < self.episodes for n in self.keep_checkpoints
         ):
@@ -84,9 +91,12 @@ class SweepPlan:
             )
 
     def runs(self) -> dict[str, TrainConfig]:
-        """Every run by its folder name, ``<condition>-<predator>-seed<S>``."""
+        """Every run by its folder name, ``<condition>-<predator>-seed<S>``; with obstacles
+        ``<condition>-obstacles<K>-<predator>[-noavoid]-seed<S>``."""
+        middle = f"-obstacles{self.obstacles}" if self.obstacles else ""
+        after = "-noavoid" if self.obstacles and not self.avoidance else ""
         return {
-            f"{condition}-{predator}-seed{seed}": TrainConfig(
+            f"{condition}{middle}-{predator}{after}-seed{seed}": TrainConfig(
                 condition=condition,
                 agent=self.agent,
                 episodes=self.episodes,
@@ -94,6 +104,9 @@ class SweepPlan:
                 seed=seed,
                 predator=predator,  # type: ignore[arg-type]
                 backend=self.backend,  # type: ignore[arg-type]
+                obstacles=self.obstacles,
+                obstacle_radius=self.obstacle_radius,
+                avoidance=self.avoidance,
             )
             for predator in self.predators
             for condition in self.conditions

@@ -14,6 +14,7 @@ import numba
 import numpy as np
 
 from pursuit_bench.conditions import TaskConfig
+from pursuit_bench.obstacles import range_readings
 from pursuit_bench.world import HALF_SIZE, RADIUS, Contacts
 
 #: Number of movement directions, every 30° relative to the line of sight (paper 2.4).
@@ -53,9 +54,10 @@ def as_xy(z: np.ndarray) -> np.ndarray:
     return (z if z.flags.c_contiguous else z.copy())[..., None].view(np.float64)
 
 
-def obs_size(n_agents: int) -> int:
-    """Length of one agent's observation: ``4 + 6 (n_agents - 1)`` = 10, 16, 22."""
-    return 6 * n_agents - 2
+def obs_size(n_agents: int, ranges: bool = False) -> int:
+    """Length of one agent's observation: ``4 + 6 (n_agents - 1)`` = 10, 16, 22, and 12 more
+    (the range readings) with ``ranges`` (a task with obstacles)."""
+    return 6 * n_agents - 2 + (N_DIRECTIONS if ranges else 0)
 
 
 @numba.njit(cache=True)
@@ -105,7 +107,9 @@ def _observe_kernel(z, w, obs, los):
                 s += 6
 
 
-def observe(positions: np.ndarray, velocities: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def observe(
+    positions: np.ndarray, velocities: np.ndarray, obstacles: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Observations and the unit LOS of every agent (docs/spec.md, observations).
 
     Returns ``(obs, los)``: obs (B, n_agents, 6 n - 2) float32, for agent i ``[x, y, own velocity
@@ -114,12 +118,16 @@ def observe(positions: np.ndarray, velocities: np.ndarray) -> tuple[np.ndarray, 
     this order: for a predator the prey, then the other predators by index; for the prey the
     predators by increasing distance (ties: the lower index). los (B, n_agents, 2): each
     predator's towards the prey, the prey's towards its nearest predator; along +x should two
-    centres coincide.
+    centres coincide. Given ``obstacles`` (B, K, 3), every observation ends with the agent's 12
+    range readings (:func:`pursuit_bench.obstacles.range_readings`).
     """
     batch, n, _ = positions.shape
-    obs = np.empty((batch, n, obs_size(n)), dtype=np.float32)
+    obs = np.empty((batch, n, obs_size(n, obstacles is not None)), dtype=np.float32)
     los = np.empty((batch, n), dtype=np.complex128)
-    _observe_kernel(as_complex(positions), as_complex(velocities), obs, los)
+    z = as_complex(positions)
+    _observe_kernel(z, as_complex(velocities), obs, los)
+    if obstacles is not None:
+        range_readings(z, los, obstacles, ROTATIONS, obs[..., obs_size(n) :])
     return obs, as_xy(los)
 
 
@@ -290,13 +298,16 @@ def finish_step(
     steps: np.ndarray,
     positions: np.ndarray,
     velocities: np.ndarray,
+    obstacles: np.ndarray | None = None,
 ) -> Finish:
-    """:func:`outcome`, truncation after ``config.max_steps`` and :func:`observe`, in one call."""
+    """:func:`outcome`, truncation after ``config.max_steps`` and :func:`observe` (with the range
+    readings given ``obstacles``), in one call."""
     batch, n, _ = positions.shape
+    z = as_complex(positions)
     out = Finish(
         outcome=Outcome(rewards=np.empty((batch, n)), terminated=np.empty(batch, bool), captured=np.empty(batch, bool)),
         truncated=np.empty(batch, dtype=bool),
-        observations=np.empty((batch, n, obs_size(n)), dtype=np.float32),
+        observations=np.empty((batch, n, obs_size(n, obstacles is not None)), dtype=np.float32),
         los=np.empty((batch, n), dtype=np.complex128),
         distance_to_prey=np.empty((batch, n)),
     )
@@ -304,7 +315,7 @@ def finish_step(
         *_reward_rules(config, contacts, modes),
         steps,
         config.max_steps,
-        as_complex(positions),
+        z,
         as_complex(velocities),
         out.outcome.rewards,
         out.outcome.terminated,
@@ -314,6 +325,8 @@ def finish_step(
         out.los,
         out.distance_to_prey,
     )
+    if obstacles is not None:
+        range_readings(z, out.los, obstacles, ROTATIONS, out.observations[..., obs_size(n) :])
     out.los = as_xy(out.los)
     return out
 

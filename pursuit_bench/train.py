@@ -26,7 +26,7 @@ import numpy as np
 
 from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
 from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.agents.kinds import KINDS, LearningAgent, ScriptedAgent
+from pursuit_bench.agents.kinds import KINDS, HierarchicalPredator, LearningAgent, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.recording import EpisodeTraces, Recorder
@@ -85,12 +85,12 @@ def build_agents(
         if config.predator in KINDS:
             learning += [(KINDS[config.predator], p) for p in predators]
         else:
-            policy = AlwaysChase() if config.predator == "always_chase" else AlwaysStalk()
-            agents.update({p: ScriptedAgent(p, policy) for p in predators})
+            fixed = AlwaysChase if config.predator == "always_chase" else AlwaysStalk
+            agents.update({p: ScriptedAgent(p, fixed(avoidance=config.avoids)) for p in predators})
         if config.prey == "learning":
             learning.append((KINDS["prey"], prey))
         else:
-            agents[prey] = ScriptedAgent(prey, FleeingPrey())
+            agents[prey] = ScriptedAgent(prey, FleeingPrey(obstacles=config.obstacles > 0))
         for kind, name in learning:
             alone = () if config.batched_learners or kind.kind == "prey" else (r, name)
             key = (kind.kind, n_obs[r], config.agent, config.num_envs, *alone)
@@ -103,7 +103,12 @@ def build_agents(
         learner = DQNLearner(
             key[1], kinds[key].n_actions, configs[members[0][0]].agent, members=len(members), seed=seeds
         )
-        made = [kinds[key](name, learner, m) for m, (_, _, name) in enumerate(members)]
+        made = [
+            HierarchicalPredator(name, learner, m, avoidance=configs[r].avoids)
+            if kinds[key] is HierarchicalPredator
+            else kinds[key](name, learner, m)
+            for m, (r, _, name) in enumerate(members)
+        ]
         groups.append(Group(learner, made, [i for _, i, _ in members], [r for r, _, _ in members]))
         for (r, _, name), agent in zip(members, made, strict=True):
             runs_agents[r][name] = agent
@@ -137,7 +142,7 @@ class Run:
             raise ValueError(f"record_every={record_every!r}: expected an integer >= 1")
         self.config, self.on_episode = config, on_episode
         self.recorder, self.record_every = recorder, record_every
-        self.env = VectorPursuitEnv(config.num_envs, config.condition, backend=config.backend)
+        self.env = VectorPursuitEnv(config.num_envs, config.condition, backend=config.backend, **config.task_options)
         self.names = self.env.agents
         self.n_predators = len(self.names) - 1
         self.agents: dict[str, LearningAgent | ScriptedAgent] = {}
@@ -147,8 +152,9 @@ class Run:
         self.last_losses: dict[str, float] = {}
         self.obs, _ = self.env.reset(seed=config.seed)
         self.chase_steps = np.zeros((config.num_envs, self.n_predators))
+        core = self.env.core
         self.traces = (
-            EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps) if recorder is not None else None
+            EpisodeTraces(core.world.positions, core.config.max_steps, core.obstacles) if recorder is not None else None
         )
         self.q_values = np.full((config.num_envs, self.n_predators, 2), np.nan)  # for recordings
         self.values = np.full((config.num_envs, self.n_predators), np.nan)
@@ -174,7 +180,8 @@ class Run:
         self.chase_steps[arena] = 0.0
         trace = None
         if self.traces is not None:
-            trace = self.traces.finish(arena, truncated, self.env.core.world.positions[arena])
+            world = self.env.core.world
+            trace = self.traces.finish(arena, truncated, world.positions[arena], world.obstacles[arena])
         if self.finished:
             return  # arenas finishing beyond the budget are not counted
         self.episodes_done += 1
@@ -220,7 +227,8 @@ class Run:
         self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
         self.chase_steps[:] = 0.0
         if self.traces is not None:
-            self.traces = EpisodeTraces(self.env.core.world.positions, self.env.config.max_steps)
+            core = self.env.core
+            self.traces = EpisodeTraces(core.world.positions, core.config.max_steps, core.obstacles)
         if self.recorder is not None:  # a resumed piece of the recording plays on after the last
             self.recorder.clock = max(self.recorder.clock, int(state.get("recording_clock", 0)))
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from pursuit_bench.agents.config import QUICK, AgentConfig
-from pursuit_bench.conditions import CONDITIONS, Backend
+from pursuit_bench.conditions import CONDITIONS, OBSTACLE_RADIUS, Backend, TaskConfig
 
 PredatorKind = Literal["hierarchical", "flat", "always_chase", "always_stalk"]
 PreyKind = Literal["learning", "scripted"]
@@ -41,6 +41,13 @@ class TrainConfig:
     same results as separate updates, faster); False updates them one by one."""
     backend: Backend = "pymunk"
     """Physics backend of the arenas."""
+    obstacles: int = 0
+    """Obstacles per arena (0: the paper's empty arena; docs/obstacles.md)."""
+    obstacle_radius: float = OBSTACLE_RADIUS
+    """Radius of every obstacle."""
+    avoidance: bool = True
+    """With obstacles, the lower layer of the hierarchical predator and of the scripted
+    baselines steers around them (``navigation.avoid``); False keeps plain parallel navigation."""
 
     def __post_init__(self) -> None:
         if self.condition not in CONDITIONS:
@@ -55,6 +62,27 @@ class TrainConfig:
             )
         if self.prey not in ("learning", "scripted"):
             raise ValueError(f"prey={self.prey!r}: expected 'learning' or 'scripted'")
+        if not isinstance(self.avoidance, bool):
+            raise ValueError(f"avoidance={self.avoidance!r}: expected True or False")
+        self.task  # noqa: B018 - validates the obstacle options
+
+    @property
+    def task_options(self) -> dict[str, Any]:
+        """The task options beside the condition (the obstacles), for the envs' constructors."""
+        if not self.obstacles:
+            return {}
+        return {"obstacles": self.obstacles, "obstacle_radius": self.obstacle_radius}
+
+    @property
+    def task(self) -> TaskConfig:
+        """The task this run trains in: its condition with the obstacles."""
+        return dataclasses.replace(CONDITIONS[self.condition], **self.task_options)
+
+    @property
+    def avoids(self) -> bool:
+        """Whether the predators' lower layer avoids obstacles in this run (there are some and
+        ``avoidance`` is on)."""
+        return self.avoidance and self.obstacles > 0
 
     def to_dict(self) -> dict[str, Any]:
         return {**dataclasses.asdict(self), "agent": self.agent.to_dict()}

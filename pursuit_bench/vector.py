@@ -40,7 +40,8 @@ class VectorPursuitEnv:
         num_envs: number of arenas B.
         condition: one of :data:`pursuit_bench.CONDITIONS`, or None to give the options.
         backend: ``"pymunk"`` (the reference, default) or ``"numpy"``.
-        **options: ``n_predators``, ``chase_cost``, ``reward_sharing``, ``max_steps``, ``wall_rule``.
+        **options: ``n_predators``, ``chase_cost``, ``reward_sharing``, ``max_steps``, ``wall_rule``,
+            ``continuous``, ``obstacles``, ``obstacle_radius``.
 
     ``step(actions)`` takes integers of shape (B, n_agents, 2): ``(mode, direction)`` per agent
     (the prey's mode is ignored), or with ``continuous=True`` floats of that shape (each agent's
@@ -48,8 +49,10 @@ class VectorPursuitEnv:
     (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
     with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
     float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
-    (B, n_predators), ``left_area`` (B, n_agents), ``episode_return`` (B, n_agents) and
-    ``episode_length`` (B,) of the episodes that ended.
+    (B, n_predators), ``left_area`` (B, n_agents), ``touching_obstacle`` (B, n_agents),
+    ``episode_return`` (B, n_agents) and ``episode_length`` (B,) of the episodes that ended.
+    With obstacles (``obstacles=K``) observations end with 12 range readings and
+    ``obstacles`` is every arena's, (B, K, 3) rows of x, y, radius.
 
     Spaces: ``single_observation_spaces`` and ``single_action_spaces`` by agent name (those of
     the PettingZoo env), ``observation_spaces`` and ``action_spaces`` the same batched over the
@@ -70,13 +73,18 @@ class VectorPursuitEnv:
         self.core = PursuitCore(self.config, num_envs, backend=backend)
         self.agents = list(self.config.agent_names)
         self.n_agents = self.config.n_agents
-        self.obs_size = task.obs_size(self.n_agents)
+        self.obs_size = task.obs_size(self.n_agents, self.config.obstacles > 0)
         self.observation_space = spaces.Box(-np.inf, np.inf, (num_envs, self.n_agents, self.obs_size), np.float32)
         self.single_observation_spaces, self.single_action_spaces = agent_spaces(self.config)
         self.observation_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_observation_spaces.items()}
         self.action_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_action_spaces.items()}
         self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence().spawn(num_envs)]
         self._returns = np.zeros((num_envs, self.n_agents))
+
+    @property
+    def obstacles(self) -> np.ndarray:
+        """(B, K, 3) every arena's obstacles in its current episode (x, y, radius)."""
+        return self.core.world.obstacles.copy()
 
     def reset(self, seed: int | Sequence[int] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Start every arena afresh. ``seed``: one integer, from which every arena's generator is
@@ -120,6 +128,7 @@ class VectorPursuitEnv:
             "captured": result.captured,
             "touching_prey": result.contacts.prey,
             "left_area": result.contacts.wall,
+            "touching_obstacle": result.contacts.obstacle,
             "episode_return": self._returns.copy(),
             "episode_length": self.core.steps.copy(),
         }

@@ -63,7 +63,7 @@ def test_prey_looks_at_its_nearest_predator() -> None:
 
 
 def contacts(wall: list[list[bool]], prey: list[list[bool]]) -> Contacts:
-    return Contacts(wall=np.array(wall), prey=np.array(prey))
+    return Contacts(wall=np.array(wall), prey=np.array(prey), obstacle=np.zeros_like(wall, dtype=bool))
 
 
 NO_CHASE = np.array([[0, 0]])

@@ -1,7 +1,8 @@
 """The agents: what each learns, what it stores and how it turns a decision into an env action.
 
 - :class:`HierarchicalPredator` (paper 2.4): the network picks the mode (stalk/chase, A = 2);
-  parallel navigation picks the direction. The replay stores the mode, never the direction.
+  parallel navigation picks the direction (with ``avoidance``, around obstacles). The replay
+  stores the mode, never the direction.
 - :class:`Prey`: the network picks one of the 12 directions (A = 12).
 - :class:`FlatPredator` (ablation): the network picks one of the 24 (mode, direction) pairs,
   action ``a = 12 · mode + direction``; no rule.
@@ -21,7 +22,7 @@ import numpy as np
 import torch
 
 from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.navigation import parallel_navigation
+from pursuit_bench.navigation import navigate
 from pursuit_bench.policies import Policy
 from pursuit_bench.task import N_DIRECTIONS
 
@@ -77,13 +78,19 @@ class LearningAgent:
 
 
 class HierarchicalPredator(LearningAgent):
-    """Deep RL picks how hard (stalk 0 / chase 1); parallel navigation picks where."""
+    """Deep RL picks how hard (stalk 0 / chase 1); parallel navigation picks where. With
+    ``avoidance`` (a task with obstacles: the observations end with range readings) the lower
+    layer steers around what they show (:func:`pursuit_bench.navigation.navigate`)."""
 
     kind = "hierarchical"
     n_actions = 2
 
+    def __init__(self, name: str, learner: DQNLearner, member: int = 0, *, avoidance: bool = False) -> None:
+        super().__init__(name, learner, member)
+        self.avoidance = avoidance
+
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        return np.stack([choices, parallel_navigation(obs, choices)], axis=-1)
+        return np.stack([choices, navigate(obs, choices, avoidance=self.avoidance)], axis=-1)
 
 
 class Prey(LearningAgent):

@@ -8,7 +8,14 @@ from pathlib import Path
 
 import click
 
-from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretrained, threads_option, trained_agents
+from pursuit_bench.cli.options import (
+    BadInput,
+    obstacles_option,
+    pretrained_options,
+    run_or_pretrained,
+    threads_option,
+    trained_agents,
+)
 
 
 @click.command(short_help="Fig. 3: value streams and chase modes of a run or a sweep.")
@@ -18,9 +25,16 @@ from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretr
 @click.option(
     "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seeds the episodes and the t-SNE."
 )
+@obstacles_option
 @threads_option
 def analyze(
-    folder: Path | None, pretrained: str | None, out: Path | None, episodes: int, seed: int, threads: int
+    folder: Path | None,
+    pretrained: str | None,
+    out: Path | None,
+    episodes: int,
+    seed: int,
+    obstacles: int | None,
+    threads: int,
 ) -> None:
     """What the trained predators' value streams represent and when they chase (Fig. 3).
 
@@ -33,7 +47,7 @@ def analyze(
         _analyze_sweep(where, episodes, seed, threads)
         return
     try:
-        with trained_agents(where, pretrained, threads) as (config, agents, _):
+        with trained_agents(where, pretrained, threads, obstacles) as (config, agents, _):
             from pursuit_bench import fig3
 
             result = fig3.analyze_run(where, config, agents, episodes, seed)

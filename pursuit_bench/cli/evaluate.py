@@ -12,7 +12,14 @@ from typing import Any
 import click
 
 from pursuit_bench import runs
-from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretrained, threads_option, trained_agents
+from pursuit_bench.cli.options import (
+    BadInput,
+    obstacles_option,
+    pretrained_options,
+    run_or_pretrained,
+    threads_option,
+    trained_agents,
+)
 from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
 
 
@@ -29,6 +36,7 @@ from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
 )
 @click.option("--num-envs", type=click.IntRange(min=1), default=64, show_default=True, help="Arenas stepped together.")
 @click.option("--no-record", is_flag=True, help="Write no Rerun recording of the evaluated episodes.")
+@obstacles_option
 @threads_option
 @click.option(
     "--tag",
@@ -52,6 +60,7 @@ def evaluate(
     seed: int,
     num_envs: int,
     no_record: bool,
+    obstacles: int | None,
     threads: int,
     tag: str | None,
     agents: tuple[str, ...],
@@ -68,7 +77,7 @@ def evaluate(
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     try:
         paths = runs.eval_paths(folder, tag)
-        with trained_agents(folder, pretrained, threads) as (config, trained, about):
+        with trained_agents(folder, pretrained, threads, obstacles) as (config, trained, about):
             _evaluate_run(folder, paths, config, trained, about, tag, settings, specs)
     except ValueError as error:  # RunBusy, a bad --agent, …
         raise BadInput(str(error)) from None

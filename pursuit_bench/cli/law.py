@@ -10,7 +10,14 @@ from typing import Any
 
 import click
 
-from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretrained, threads_option, trained_agents
+from pursuit_bench.cli.options import (
+    BadInput,
+    obstacles_option,
+    pretrained_options,
+    run_or_pretrained,
+    threads_option,
+    trained_agents,
+)
 
 
 @click.command(short_help="Fit pursuit laws (pursuit, navigation, mixed) to the predators' pursuits.")
@@ -18,8 +25,17 @@ from pursuit_bench.cli.options import BadInput, pretrained_options, run_or_pretr
 @pretrained_options
 @click.option("--episodes", type=click.IntRange(min=1), default=20, show_default=True, help="Episodes to play per run.")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seeds the episodes.")
+@obstacles_option
 @threads_option
-def law(folder: Path | None, pretrained: str | None, out: Path | None, episodes: int, seed: int, threads: int) -> None:
+def law(
+    folder: Path | None,
+    pretrained: str | None,
+    out: Path | None,
+    episodes: int,
+    seed: int,
+    obstacles: int | None,
+    threads: int,
+) -> None:
     """Fit proportional pursuit, proportional navigation and the mixed law to every predator's
     pursuits (docs/pursuit-law.md), beside the scripted predators in their places: law.json and
     law.png. On a SWEEP: every evaluated run (without the scripted references), summarised per
@@ -29,11 +45,19 @@ def law(folder: Path | None, pretrained: str | None, out: Path | None, episodes:
         _law_sweep(where, episodes, seed, threads)
         return
     try:
-        with trained_agents(where, pretrained, threads) as (config, agents, _):
+        with trained_agents(where, pretrained, threads, obstacles) as (config, agents, _):
             from pursuit_bench import pursuit_laws
 
             name = where.name if pretrained is None else f"shipped agents of {pretrained}"
-            result = pursuit_laws.analyse(config.condition, agents, config.predator, episodes, seed)
+            result = pursuit_laws.analyse(
+                config.condition,
+                agents,
+                config.predator,
+                episodes,
+                seed,
+                task_options=config.task_options,
+                avoidance=config.avoids,
+            )
             _write(where, result, f"{name}: {config.condition}, pursuit laws fitted to {episodes} episodes")
     except ValueError as error:
         raise BadInput(str(error)) from None
@@ -74,7 +98,15 @@ def _law_sweep(sweep: Path, episodes: int, seed: int, threads: int) -> None:
         run = folder.parent
         config = runs.read_config(run)[0]
         agents = runs.load_agents(run)
-        result = pursuit_laws.analyse(config.condition, agents, config.predator, episodes, seed, references=False)  # type: ignore[arg-type]
+        result = pursuit_laws.analyse(
+            config.condition,
+            agents,  # type: ignore[arg-type]
+            config.predator,
+            episodes,
+            seed,
+            references=False,
+            task_options=config.task_options,
+        )
         per_run.append({**result, "run": run.name})
         winners = ", ".join(f"{p} {fits['winner']}" for p, fits in result["kinds"][config.predator].items())
         click.echo(f"{run.name}: {winners}")

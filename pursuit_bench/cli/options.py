@@ -17,7 +17,7 @@ from typing import Any
 import click
 
 from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS, AgentConfig
-from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.conditions import CONDITIONS, MAX_OBSTACLES, OBSTACLE_RADII, OBSTACLE_RADIUS
 
 PREDATOR_KINDS = ("hierarchical", "flat", "always_chase", "always_stalk")
 #: Training budgets above this (100 times the paper's 1e6 episodes) are surely a typing error.
@@ -98,6 +98,14 @@ def training_options(command: Any) -> Any:
             show_default=True,
             help="Physics backend of the arenas: pymunk (the reference) or the numpy twin.",
         ),
+        *obstacle_options(),
+        click.option(
+            "--avoidance/--no-avoidance",
+            default=True,
+            show_default=True,
+            help="With obstacles: the lower layer of the hierarchical predator and of the baselines "
+            "steers around them; --no-avoidance keeps plain parallel navigation.",
+        ),
         click.option(
             "--record-every",
             type=click.IntRange(min=1),
@@ -124,6 +132,51 @@ def training_options(command: Any) -> Any:
     for option in reversed(options):
         command = option(command)
     return command
+
+
+def obstacle_options() -> list[Any]:
+    """``--obstacles N`` and ``--obstacle-radius R`` of train and sweep (docs/obstacles.md)."""
+    return [
+        click.option(
+            "--obstacles",
+            type=click.IntRange(0, MAX_OBSTACLES),
+            default=0,
+            show_default=True,
+            help="Static circular obstacles per arena (0: the paper's empty arena).",
+        ),
+        click.option(
+            "--obstacle-radius",
+            type=click.FloatRange(*OBSTACLE_RADII),
+            default=OBSTACLE_RADIUS,
+            show_default=True,
+            help="Radius of every obstacle.",
+        ),
+    ]
+
+
+def obstacles_option(command: Any) -> Any:
+    """``--obstacles N`` of eval, analyze and law: play with N obstacles instead of the run's."""
+    return click.option(
+        "--obstacles",
+        type=click.IntRange(0, MAX_OBSTACLES),
+        default=None,
+        help="Play with N obstacles instead of as many as the agents trained with [theirs]. Agents trained "
+        "without obstacles observe no range readings, so 0 and N > 0 do not mix.",
+    )(command)
+
+
+def with_obstacles(config: Any, obstacles: int | None) -> Any:
+    """``config`` (a TrainConfig) with ``obstacles`` obstacles (None: as it is); refused where
+    the agents' observations would change shape (0 against N > 0)."""
+    if obstacles is None or obstacles == config.obstacles:
+        return config
+    if (obstacles > 0) != (config.obstacles > 0):
+        raise BadInput(
+            f"--obstacles {obstacles}: these agents were trained with {config.obstacles} obstacles; with and "
+            "without obstacles they observe different things (range readings): give a count > 0 only for agents "
+            "trained with obstacles, 0 for none"
+        )
+    return dataclasses.replace(config, obstacles=obstacles)
 
 
 def threads_option(command: Any) -> Any:
@@ -205,10 +258,13 @@ def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def trained_agents(folder: Path, pretrained: str | None, threads: int) -> Iterator[tuple[Any, dict[str, Any], dict]]:
+def trained_agents(
+    folder: Path, pretrained: str | None, threads: int, obstacles: int | None = None
+) -> Iterator[tuple[Any, dict[str, Any], dict]]:
     """Hold ``folder``'s lock (:func:`locked`) with torch on ``threads`` threads, and give the
     agents to work with: (training config, agents by name, what an evaluation says of them), a
-    RUN's last checkpoint's (``runs.described``) or the shipped ones' (``pretrained.described``)."""
+    RUN's last checkpoint's (``runs.described``) or the shipped ones' (``pretrained.described``);
+    the config with ``obstacles`` obstacles when given (:func:`with_obstacles`)."""
     with locked(folder, pretrained):
         import torch
 
@@ -216,4 +272,5 @@ def trained_agents(folder: Path, pretrained: str | None, threads: int) -> Iterat
         from pursuit_bench import runs
 
         torch.set_num_threads(threads)
-        yield runs.described(folder) if pretrained is None else shipped.described(pretrained)
+        config, agents, about = runs.described(folder) if pretrained is None else shipped.described(pretrained)
+        yield with_obstacles(config, obstacles), agents, about

@@ -86,6 +86,9 @@ def sweep(
     workers: int | None,
     num_envs: int | None,
     physics: str,
+    obstacles: int,
+    obstacle_radius: float,
+    avoidance: bool,
     backend: str,
     address: str | None,
     record_every: int | None,
@@ -122,6 +125,9 @@ def sweep(
             checkpoint_every=checkpoint_every,
             preset=preset,
             keep_checkpoints=episode_counts(keep_checkpoints),
+            obstacles=obstacles,
+            obstacle_radius=obstacle_radius,
+            avoidance=avoidance,
         )
         note = sweeps.open_sweep(out, plan)
     except ValueError as error:

@@ -167,6 +167,9 @@ def train(
     prey: str,
     batched_learners: bool,
     physics: str,
+    obstacles: int,
+    obstacle_radius: float,
+    avoidance: bool,
     record_every: int | None,
     no_record: bool,
     checkpoint_every: int,
@@ -183,7 +186,9 @@ def train(
     every = recording_every(no_record, record_every)
     if resume and force:
         raise BadInput("--resume and --force contradict each other: pick one")
-    out = out or Path("runs") / f"{condition}-seed{seed}"
+    out = out or Path("runs") / (
+        f"{condition}-obstacles{obstacles}-seed{seed}" if obstacles else f"{condition}-seed{seed}"
+    )
     if out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
     note = None
@@ -203,6 +208,9 @@ def train(
                 prey=prey,  # type: ignore[arg-type]
                 batched_learners=batched_learners,
                 backend=physics,  # type: ignore[arg-type]
+                obstacles=obstacles,
+                obstacle_radius=obstacle_radius,
+                avoidance=avoidance,
             )
         except ValueError as error:
             raise BadInput(str(error)) from None
