@@ -29,46 +29,97 @@ _CANDIDATES, _DRAWS, _RESTARTS = 32, 20, 50
 
 def place_obstacles(rng: np.random.Generator, starts: np.ndarray, count: int, radius: float) -> np.ndarray:
     """Obstacles (L, count, 3) rows of x, y, radius for each of L start layouts ``starts``
-    (L, n_agents, 2), drawn from ``rng`` one obstacle after another: candidate centres uniform
-    in the square where the wall gap holds, the first clear of the starts and of the obstacles
-    already placed taken. A layout that cannot be completed is started again; a ValueError if
-    none can be (too many or too large obstacles)."""
+    (L, n_agents, 2), drawn from ``rng`` one obstacle after another: candidate centres in
+    batches of 32, uniform in the square where the wall gap holds; the first candidate of a
+    batch clear of the starts and of the obstacles already placed is taken. After 20 batches
+    without one the layout is started again; a ValueError if 50 starts fail (too many or too
+    large obstacles: ``TaskConfig`` refuses those).
+
+    The batches are drawn ahead in one call and the generator is then left exactly where this
+    sequence of draws leaves it (its state restored, the used draws drawn again), so a reset
+    costs one compiled loop instead of Python per candidate."""
     bound = HALF_SIZE - radius - OBSTACLE_GAP
     clear_start = (radius + RADIUS + START_GAP) ** 2
     clear_other = (2 * radius + OBSTACLE_GAP) ** 2
     out = np.empty((len(starts), count, 3))
     out[:, :, 2] = radius
-    for layout, agents in enumerate(starts):
-        for _ in range(_RESTARTS):
-            placed: list[np.ndarray] = []
-            draws = 0
-            while len(placed) < count and draws < _DRAWS:
-                draws += 1
-                candidates = rng.uniform(-bound, bound, size=(_CANDIDATES, 2))
-                near = np.concatenate([agents, np.array(placed).reshape(-1, 2)])
-                gaps = ((candidates[:, None] - near[None]) ** 2).sum(-1)
-                limits = np.r_[np.full(len(agents), clear_start), np.full(len(placed), clear_other)]
-                fits = np.flatnonzero((gaps >= limits).all(axis=1))
-                if len(fits):
-                    placed.append(candidates[fits[0]])
-                    draws = 0
-            if len(placed) == count:
-                out[layout, :, :2] = np.array(placed).reshape(count, 2)
-                break
-        else:
+    ahead = 4 * count * len(starts)
+    while True:
+        state = rng.bit_generator.state
+        batches = rng.uniform(-bound, bound, size=(ahead, _CANDIDATES, 2))
+        used = _place_kernel(batches, starts, count, clear_start, clear_other, _DRAWS, _RESTARTS, out)
+        rng.bit_generator.state = state
+        if used >= 0:
+            rng.uniform(size=used * _CANDIDATES * 2)  # what those batches took from the generator
+            return out
+        if used == _IMPOSSIBLE:
             raise ValueError(
                 f"obstacles={count}, obstacle_radius={radius}: no room for them with the gaps the "
                 "placement rule keeps; expected fewer or smaller obstacles"
             )
-    return out
+        ahead *= 4  # more batches than were drawn ahead were needed
+
+
+_IMPOSSIBLE, _MORE = -2, -1
+
+
+@numba.njit(cache=True)
+def _place_kernel(batches, starts, count, clear_start, clear_other, draws_per_try, tries, out):
+    """Place the obstacles of every layout from the batches in order; return the batches used,
+    ``_MORE`` if they ran out, ``_IMPOSSIBLE`` if a layout failed ``tries`` times."""
+    used = 0
+    for layout in range(starts.shape[0]):
+        done = False
+        for _ in range(tries):
+            placed = 0
+            draws = 0
+            while placed < count and draws < draws_per_try:
+                draws += 1
+                if used == batches.shape[0]:
+                    return -1
+                batch = batches[used]
+                used += 1
+                for c in range(batch.shape[0]):
+                    x, y = batch[c, 0], batch[c, 1]
+                    fits = True
+                    for i in range(starts.shape[1]):
+                        dx, dy = x - starts[layout, i, 0], y - starts[layout, i, 1]
+                        if dx * dx + dy * dy < clear_start:
+                            fits = False
+                            break
+                    for j in range(placed):
+                        if not fits:
+                            break
+                        dx, dy = x - out[layout, j, 0], y - out[layout, j, 1]
+                        if dx * dx + dy * dy < clear_other:
+                            fits = False
+                    if fits:
+                        out[layout, placed, 0], out[layout, placed, 1] = x, y
+                        placed += 1
+                        draws = 0
+                        break
+            if placed == count:
+                done = True
+                break
+        if not done:
+            return -2
+    return used
 
 
 @numba.njit(cache=True)
 def _ranges_kernel(z, los, obstacles, rotations, limit, cap, out):
     batch, n = z.shape
+    k_obstacles = obstacles.shape[1]
+    dx = np.empty(k_obstacles)
+    dy = np.empty(k_obstacles)
+    outside = np.empty(k_obstacles)
     for b in range(batch):
         for i in range(n):
             px, py = z[b, i].real, z[b, i].imag
+            for j in range(k_obstacles):  # what does not depend on the direction, once
+                dx[j], dy[j] = obstacles[b, j, 0] - px, obstacles[b, j, 1] - py
+                reach = obstacles[b, j, 2] + RADIUS
+                outside[j] = dx[j] * dx[j] + dy[j] * dy[j] - reach * reach
             for k in range(rotations.shape[0]):
                 u = los[b, i] * rotations[k]
                 ux, uy = u.real, u.imag
@@ -81,17 +132,14 @@ def _ranges_kernel(z, los, obstacles, rotations, limit, cap, out):
                     t = min(t, (limit - py) / uy)
                 elif uy < -1e-12:
                     t = min(t, (-limit - py) / uy)
-                for j in range(obstacles.shape[1]):
-                    dx, dy = obstacles[b, j, 0] - px, obstacles[b, j, 1] - py
-                    reach = obstacles[b, j, 2] + RADIUS
-                    outside = dx * dx + dy * dy - reach * reach
-                    along = dx * ux + dy * uy
+                for j in range(k_obstacles):
+                    along = dx[j] * ux + dy[j] * uy
                     if along <= 0.0:
                         continue  # pointing away from it (or along its side when touching)
-                    if outside <= 0.0:
+                    if outside[j] <= 0.0:
                         t = 0.0  # touching it already, pointing into it
-                    elif along * along >= outside:
-                        t = min(t, along - np.sqrt(along * along - outside))
+                    elif along * along >= outside[j]:
+                        t = min(t, along - np.sqrt(along * along - outside[j]))
                 out[b, i, k] = max(t, 0.0)
 
 

@@ -286,3 +286,10 @@ def test_train_and_eval_with_obstacles(tmp_path: Path) -> None:
     assert set(result["obstacle_collisions"]) == {"predator_0", "predator_1", "prey_0"}
     code, output = run_cli("train", "--condition", "1p-low", "--obstacles", "9", "--out", str(tmp_path / "x"))
     assert code == 2 and "--obstacles" in output and "Traceback" not in output
+
+
+def test_the_experiment_table_in_the_docs_is_what_the_committed_results_say() -> None:
+    import obstacle_study
+
+    table = obstacle_study.markdown(obstacle_study.rows())
+    assert table in (Path(__file__).parents[1] / "docs" / "obstacles.md").read_text()
