@@ -76,7 +76,7 @@ def _place_kernel(batches, starts, count, clear_start, clear_other, draws_per_tr
             while placed < count and draws < draws_per_try:
                 draws += 1
                 if used == batches.shape[0]:
-                    return -1
+                    return _MORE
                 batch = batches[used]
                 used += 1
                 for c in range(batch.shape[0]):
@@ -102,7 +102,7 @@ def _place_kernel(batches, starts, count, clear_start, clear_other, draws_per_tr
                 done = True
                 break
         if not done:
-            return -2
+            return _IMPOSSIBLE
     return used
 
 
