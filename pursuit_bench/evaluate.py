@@ -188,14 +188,14 @@ def evaluate_agents(
     kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
     epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
 
-    def play(actors: dict[str, Actor], rec: Recorder | None = None) -> Episodes:
+    def play(actors: dict[str, Actor], rec: Recorder | None = None, greedy: bool = False) -> Episodes:
         return run_episodes(
             condition,
             actors,
             episodes,
             seed=seed,
             num_envs=num_envs,
-            epsilons=epsilons,
+            epsilons={} if greedy else epsilons,
             recorder=rec,
             backend=backend,
             check=check,
@@ -219,14 +219,8 @@ def evaluate_agents(
     captured = trained.captured
     prey_check = None
     if prey_epsilon is not None:  # a learning prey: greedy, and the scripted one in its place
-        same = {"seed": seed, "num_envs": num_envs, "backend": backend, "check": check, "task_options": task_options}
-        greedy = run_episodes(condition, agents, episodes, **same)  # type: ignore[arg-type]
-        fleeing = run_episodes(
-            condition,
-            {**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))},
-            episodes,
-            **same,  # type: ignore[arg-type]
-        )
+        greedy = play(agents, greedy=True)
+        fleeing = play({**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))}, greedy=True)
         prey_check = {
             name: {
                 "return": float(played.returns[:, -1].mean()),

@@ -99,7 +99,10 @@ def avoid(directions: np.ndarray, ranges: np.ndarray, safety: float = SAFETY_DIS
 def navigate(observations: np.ndarray, modes: np.ndarray | int, *, avoidance: bool = False) -> np.ndarray:
     """The lower layer: :func:`parallel_navigation`, then with ``avoidance`` :func:`avoid` on the
     observations' range readings (their last 12 entries: only in a task with obstacles)."""
-    directions = parallel_navigation(observations, modes)
-    if not avoidance:
-        return directions
-    return avoid(directions, np.asarray(observations)[..., -N_DIRECTIONS:])
+    return around_obstacles(parallel_navigation(observations, modes), observations, avoidance)
+
+
+def around_obstacles(directions: np.ndarray, observations: np.ndarray, avoidance: bool) -> np.ndarray:
+    """``directions`` as they are, or with ``avoidance`` through :func:`avoid` on the
+    observations' range readings (their last 12 entries: only in a task with obstacles)."""
+    return avoid(directions, np.asarray(observations)[..., -N_DIRECTIONS:]) if avoidance else directions

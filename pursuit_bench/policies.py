@@ -17,7 +17,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from pursuit_bench.navigation import SAFETY_DISTANCE, avoid, navigate, pure_pursuit
+from pursuit_bench.navigation import SAFETY_DISTANCE, around_obstacles, navigate, pure_pursuit
 from pursuit_bench.task import ACCEL_PREY, CHASE, N_DIRECTIONS, STALK, rotate_by_direction
 from pursuit_bench.world import DAMPING, DT, HALF_SIZE, RADIUS
 
@@ -69,8 +69,7 @@ class PurePursuitPredator(_FixedModePredator):
         self.mode = mode
 
     def _directions(self, observations: np.ndarray) -> np.ndarray:
-        directions = pure_pursuit(observations)
-        return avoid(directions, observations[..., -N_DIRECTIONS:]) if self.avoidance else directions
+        return around_obstacles(pure_pursuit(observations), observations, self.avoidance)
 
 
 class FleeingPrey:

@@ -166,7 +166,8 @@ def leave_obstacles(
     """Which disks touch an obstacle (centres within its radius + ``RADIUS`` +
     ``CONTACT_TOLERANCE``), (B, n) bool, and which arenas had a disk put back, (B,) bool. A disk
     overlapping an obstacle is put back touching it, along the line from the obstacle's centre,
-    and loses the part of its velocity pointing into it; in place."""
+    and loses the part of its velocity pointing into it; in place. Without obstacles (K = 0)
+    nothing touches and nothing moves."""
     touching = np.empty(positions.shape[:2], dtype=bool)
     moved = np.empty(positions.shape[0], dtype=bool)
     _leave_obstacles_kernel(positions, velocities, obstacles, CONTACT_TOLERANCE, touching, moved)
@@ -212,10 +213,7 @@ class NumpyWorld:
     def step(self, accelerations: np.ndarray) -> Contacts:
         v = integrate_velocity(self.velocities, accelerations)
         p = self.positions + v * DT
-        if self.obstacles.shape[1]:
-            obstacle, _ = leave_obstacles(p, v, self.obstacles)
-        else:
-            obstacle = np.zeros(p.shape[:2], dtype=bool)
+        obstacle, _ = leave_obstacles(p, v, self.obstacles)
         wall, _ = touch_walls(p, v, self.limit, self.wall_rule)
         self.positions, self.velocities = p, v
         return Contacts(wall=wall, prey=_prey_overlap(p), obstacle=obstacle)
@@ -373,13 +371,9 @@ class PymunkWorld:
         self._write(integrate_velocity(self.velocities, accelerations))
         self.space.step(DT)
         self._read()
-        if self.obstacles.shape[1]:
-            obstacle, pushed = leave_obstacles(self.positions, self.velocities, self.obstacles)
-        else:
-            obstacle, pushed = np.zeros(self.positions.shape[:2], dtype=bool), None
+        obstacle, pushed = leave_obstacles(self.positions, self.velocities, self.obstacles)
         wall, moved = touch_walls(self.positions, self.velocities, self.limit, self.wall_rule)
-        if pushed is not None:
-            moved |= pushed
+        moved |= pushed
         prey = self._prey.copy()
         if moved.any():
             self._moved = True
