@@ -35,6 +35,9 @@ OBSTACLE_GAP = 0.15
 #: this. Placement then always succeeds (measured: it first fails above 1.69; 8 obstacles of the
 #: default radius give 1.62).
 MAX_CROWDING = 1.65
+#: The dynamics factors a task may shift, with their ranges: damping up to 4 (all velocity
+#: lost in a step), accelerations up to 4 times the paper's.
+DYNAMICS_FACTORS = (("damping_factor", 0.0, 4.0), ("predator_accel_factor", 0.0, 4.0), ("prey_accel_factor", 0.0, 4.0))
 
 
 @dataclass(frozen=True)
@@ -66,6 +69,13 @@ class TaskConfig:
     ends with 12 range readings, and ``state()`` with the obstacles."""
     obstacle_radius: float = OBSTACLE_RADIUS
     """Radius of every obstacle, 0.1 to 0.25 (the arena is 2 across, an agent's radius 0.05)."""
+    damping_factor: float = 1.0
+    """The world's damping (the fraction of velocity lost per step, 0.25) times this factor,
+    from 0 to 4 (a robustness test, docs/robustness.md; 1: the paper's world, bit for bit)."""
+    predator_accel_factor: float = 1.0
+    """Every predator's acceleration (both modes) times this factor, >= 0 (1: unchanged)."""
+    prey_accel_factor: float = 1.0
+    """The prey's acceleration times this factor, >= 0 (1: unchanged)."""
 
     def __post_init__(self) -> None:
         if (
@@ -92,6 +102,10 @@ class TaskConfig:
         low, high = OBSTACLE_RADII
         if isinstance(r, bool) or not isinstance(r, (int, float)) or not low <= r <= high:
             raise ValueError(f"obstacle_radius={r!r}: expected a number from {low} to {high}")
+        for name, low_, high_ in DYNAMICS_FACTORS:
+            f = getattr(self, name)
+            if isinstance(f, bool) or not isinstance(f, (int, float)) or not low_ <= f <= high_:
+                raise ValueError(f"{name}={f!r}: expected a number from {low_} to {high_}")
         if k * (2 * r + OBSTACLE_GAP) ** 2 > MAX_CROWDING:
             raise ValueError(
                 f"obstacles={k} of obstacle_radius={r}: no room for them with the gaps kept between "
@@ -128,11 +142,11 @@ def resolve_condition(condition: str | None = None, **options: object) -> TaskCo
     """Build a :class:`TaskConfig` from a condition name and/or explicit options.
 
     A condition fixes ``n_predators``, ``chase_cost`` and ``reward_sharing``; giving one of those
-    as well is an error (ambiguous). ``max_steps``, ``wall_rule``, ``continuous``, ``obstacles``
-    and ``obstacle_radius`` may be set with either.
+    as well is an error (ambiguous). ``max_steps``, ``wall_rule``, ``continuous``, ``obstacles``,
+    ``obstacle_radius`` and the dynamics factors may be set with either.
     """
     known = {"n_predators", "chase_cost", "reward_sharing", "max_steps", "wall_rule", "continuous"}
-    known |= {"obstacles", "obstacle_radius"}
+    known |= {"obstacles", "obstacle_radius", *(name for name, _, _ in DYNAMICS_FACTORS)}
     unknown = set(options) - known
     if unknown:
         raise ValueError(f"unknown option(s) {sorted(unknown)}: expected some of {sorted(known)}")

@@ -13,7 +13,7 @@ import numpy as np
 from pursuit_bench import task
 from pursuit_bench.conditions import TaskConfig
 from pursuit_bench.obstacles import place_obstacles
-from pursuit_bench.world import Backend, Contacts, make_world
+from pursuit_bench.world import DAMPING, DT, Backend, Contacts, make_world
 
 #: Start layouts an arena draws from its generator at a time (see ``PursuitCore._draw_starts``).
 STARTS_AHEAD = 16
@@ -129,8 +129,22 @@ class PursuitCore:
         acc, modes = task.continuous_accelerations(self._los, actions, self.config.n_predators)
         return self._advance(acc, modes)
 
+    def _shifted(self, acc: np.ndarray) -> np.ndarray:
+        """The accelerations the world applies under the task's dynamics factors: each agent's
+        scaled by its factor, and the damping shifted by an acceleration against the velocity
+        (``(1 - f D) v + a DT == (1 - D) v + (a - (f - 1) D v / DT) DT``). Unchanged, the same
+        array, when every factor is 1."""
+        c = self.config
+        if c.predator_accel_factor != 1.0 or c.prey_accel_factor != 1.0:
+            scale = np.full(c.n_agents, c.predator_accel_factor)
+            scale[-1] = c.prey_accel_factor
+            acc = acc * scale[None, :, None]
+        if c.damping_factor != 1.0:
+            acc = acc - (c.damping_factor - 1.0) * DAMPING * self.world.velocities / DT
+        return acc
+
     def _advance(self, acc: np.ndarray, modes: np.ndarray) -> StepResult:
-        contacts = self.world.step(acc)
+        contacts = self.world.step(self._shifted(acc))
         self.steps += 1
         world = self.world
         done = task.finish_step(

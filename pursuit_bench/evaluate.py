@@ -10,6 +10,7 @@ import numpy as np
 
 from pursuit_bench.agents.kinds import HierarchicalPredator, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.perturbations import Perturbations, PerturbedEnv
 from pursuit_bench.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.recording import EpisodeTraces, Recorder
 from pursuit_bench.vector import VectorPursuitEnv, put_actions
@@ -57,6 +58,7 @@ def run_episodes(
     on_step: Callable[[np.ndarray, np.ndarray, np.ndarray], None] | None = None,
     check: Callable[[], None] = lambda: None,
     task_options: Mapping[str, Any] | None = None,
+    perturbations: Perturbations | None = None,
 ) -> Episodes:
     """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
     ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
@@ -65,8 +67,13 @@ def run_episodes(
     done)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
     (B, n_agents, 2) and which arenas' episodes the step ended (B,). ``check()`` is called
     before every step: the place to stop (by raising) when the caller was asked to.
-    ``task_options``: task options beside the condition (``obstacles``, ``obstacle_radius``)."""
-    env = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend, **(task_options or {}))
+    ``task_options``: task options beside the condition (``obstacles``, ``obstacle_radius``).
+    ``perturbations``: the world's changes join the task options, and the agents sense and act
+    through :class:`~pursuit_bench.perturbations.PerturbedEnv` (seeded by ``seed``)."""
+    p = perturbations or Perturbations()
+    options = {**(task_options or {}), **p.task_options()}
+    plain = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend, **options)
+    env = PerturbedEnv(plain, p, seed) if p.senses else plain
     epsilons = epsilons or {}
     names, n_pred = env.agents, env.n_agents - 1
     obs, _ = env.reset(seed=seed)
@@ -162,6 +169,8 @@ def evaluate_agents(
     check: Callable[[], None] = lambda: None,
     task_options: Mapping[str, Any] | None = None,
     avoidance: bool = False,
+    perturbations: Perturbations | None = None,
+    prey_check: bool = True,
 ) -> dict[str, Any]:
     """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
     learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
@@ -181,7 +190,11 @@ def evaluate_agents(
     With obstacles (``task_options``), the baselines' lower layer avoids them as ``avoidance``
     says (that of the trained predators), the scripted prey avoids them, and the result holds
     ``obstacle_collisions`` and ``obstacle_contact_steps``: each agent's collisions and steps
-    in contact per episode, as trained (:class:`Episodes`)."""
+    in contact per episode, as trained (:class:`Episodes`).
+
+    ``perturbations`` (:mod:`pursuit_bench.perturbations`) change every variant's world and
+    senses alike; the result names them (``perturbations``). ``prey_check=False`` skips the
+    prey's check (two plays fewer)."""
     names = list(agents)
     obstacles = bool((task_options or {}).get("obstacles"))
     predators, prey = names[:-1], names[-1]
@@ -200,6 +213,7 @@ def evaluate_agents(
             backend=backend,
             check=check,
             task_options=task_options,
+            perturbations=perturbations,
         )
 
     trained = play(agents, recorder)
@@ -217,11 +231,11 @@ def evaluate_agents(
             }
         )
     captured = trained.captured
-    prey_check = None
-    if prey_epsilon is not None:  # a learning prey: greedy, and the scripted one in its place
+    checked = None
+    if prey_epsilon is not None and prey_check:  # a learning prey: greedy, and the scripted one in its place
         greedy = play(agents, greedy=True)
         fleeing = play({**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))}, greedy=True)
-        prey_check = {
+        checked = {
             name: {
                 "return": float(played.returns[:, -1].mean()),
                 "left_area": float(played.left_area[:, -1].mean()),
@@ -235,6 +249,7 @@ def evaluate_agents(
         "episodes": episodes,
         "seed": seed,
         "predator_kind": kind,
+        "prey_kind": str(getattr(agents[prey], "kind", "prey")),
         "panels": panels,
         "capture_rate": float(captured.mean()),
         "time_to_capture_s": float(trained.lengths[captured].mean() * 0.1) if captured.any() else None,
@@ -243,7 +258,8 @@ def evaluate_agents(
         "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
         "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
         "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon},
-        "prey_check": prey_check,
+        "prey_check": checked,
+        **({"perturbations": perturbations.changed} if perturbations is not None and perturbations.changed else {}),
         **(
             {
                 "task_options": dict(task_options or {}),

@@ -18,6 +18,8 @@ the ε = 0.1 the paper gives a learned prey during evaluation is applied to our 
 from __future__ import annotations
 
 import importlib
+import os
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -29,10 +31,15 @@ def load_factory(spec: str) -> Callable[[], Any]:
     module_name, _, attribute = spec.partition(":")
     if not module_name or not attribute:
         raise ValueError(f"{spec!r}: expected MODULE:FACTORY, e.g. my_agents:make_predator")
+    here = os.getcwd()
+    if here not in sys.path:  # the working directory, as ``python -m`` has it
+        sys.path.insert(0, here)
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:
         raise ValueError(f"{spec!r}: cannot import {module_name!r} ({error})") from None
+    except Exception as error:  # the module itself failed while importing
+        raise ValueError(f"{spec!r}: importing {module_name!r} raised {type(error).__name__}: {error}") from None
     factory = getattr(module, attribute, None)
     if not callable(factory):
         raise ValueError(f"{spec!r}: {module_name} has no callable {attribute!r}")
@@ -47,13 +54,36 @@ class ExternalAgent:
         if not (hasattr(agent, "act") or hasattr(agent, "act_batch")):
             raise ValueError(f"{spec!r} returned {type(agent).__name__}, which has neither act nor act_batch")
         self.name, self.agent, self.kind, self.predator = name, agent, f"external ({spec})", predator
+        self.spec = spec
 
     def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> np.ndarray:
-        if hasattr(self.agent, "act_batch"):
-            actions = np.asarray(self.agent.act_batch(obs))
-        else:
-            actions = np.array([np.asarray(self.agent.act(o)) for o in obs])
-        actions = actions.astype(np.int64).reshape((len(obs), 2) if self.predator else (len(obs),))
+        call = "act_batch" if hasattr(self.agent, "act_batch") else "act"
+        try:
+            if call == "act_batch":
+                raw = np.asarray(self.agent.act_batch(obs))
+            else:
+                raw = np.array([np.asarray(self.agent.act(o)) for o in obs])
+        except Exception as error:
+            raise ValueError(
+                f"agent {self.name} ({self.spec}): {call} raised {type(error).__name__}: {error}"
+            ) from None
+        shape = (len(obs), 2) if self.predator else (len(obs),)
+        expected = "(mode, direction) per observation" if self.predator else "one direction per observation"
+        if raw.size != int(np.prod(shape)):
+            raise ValueError(
+                f"agent {self.name} ({self.spec}): {call} returned shape {raw.shape}; expected {expected}, {shape}"
+            )
+        if not np.issubdtype(raw.dtype, np.number) or not np.all(np.isfinite(raw)) or np.any(raw != np.round(raw)):
+            raise ValueError(f"agent {self.name} ({self.spec}): {call} returned non-integer actions ({raw.dtype})")
+        actions = raw.astype(np.int64).reshape(shape)
+        directions = actions[:, 1] if self.predator else actions
+        if np.any((directions < 0) | (directions > 11)) or (
+            self.predator and np.any((actions[:, 0] < 0) | (actions[:, 0] > 1))
+        ):
+            raise ValueError(
+                f"agent {self.name} ({self.spec}): {call} returned an action out of range; expected "
+                + ("mode 0 or 1 and direction 0..11" if self.predator else "a direction 0..11")
+            )
         return actions
 
     def act(self, observation: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any:
@@ -68,5 +98,10 @@ def replaced(agents: dict[str, Any], specs: dict[str, str]) -> dict[str, Any]:
         raise ValueError(f"--agent {unknown[0]}=…: no such agent here; expected one of {', '.join(names)}")
     out = dict(agents)
     for name, spec in specs.items():
-        out[name] = ExternalAgent(name, load_factory(spec)(), spec, predator=name != names[-1])
+        factory = load_factory(spec)
+        try:
+            made = factory()
+        except Exception as error:
+            raise ValueError(f"--agent {name}={spec}: the factory raised {type(error).__name__}: {error}") from None
+        out[name] = ExternalAgent(name, made, spec, predator=name != names[-1])
     return out

@@ -12,12 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench import analysis, runs
+from pursuit_bench import analysis, runs, statistics
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.plots import fig3_png, modes_png
 from pursuit_bench.recording import record_embedding
-from pursuit_bench.report import interval
 from pursuit_bench.train import TrainConfig
 
 
@@ -94,7 +93,7 @@ def analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> dict[str, Any
     for (n, cost), rows in sorted(groups.items()):
         table = np.stack([r[0] for r in rows])  # (seeds, bins)
         mean = [None if np.isnan(c).all() else float(np.nanmean(c)) for c in table.T]
-        cis = [interval(c[~np.isnan(c)]) if (~np.isnan(c)).sum() > 1 else None for c in table.T]
+        cis = [_proportion_interval(c[~np.isnan(c)]) for c in table.T]
         onset = np.array([o for r in rows for o in r[1]])
         label = f"{n} predator{'s' if n > 1 else ''}, {cost} cost"
         result[label] = {
@@ -102,7 +101,7 @@ def analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> dict[str, Any
             "p_chase": mean,
             "p_chase_ci": cis,
             "chase_onset_median": float(np.median(onset)) if len(onset) else None,
-            "chase_onset_ci": interval(onset) if len(onset) > 1 else None,
+            "chase_onset_ci": statistics.t_interval(onset),
         }
         curves[label] = {
             "bins": analysis.DISTANCE_BINS.tolist(),
@@ -113,6 +112,14 @@ def analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> dict[str, Any
     atomic_write_text(sweep_folder / "analysis.json", json.dumps(result, indent=2) + "\n")
     costs = sorted({cost for _, cost in groups})
     compared = "low vs high chase cost" if len(costs) > 1 else f"{costs[0]} chase cost only"
-    title = f"P(chase) by distance, {compared} (mean over seeds, 95 % CI)"
+    seeds = max(len(rows) for rows in groups.values())
+    spread = "95 % t-interval" if seeds > 1 else "one run: Wilson interval"
+    title = f"P(chase) by distance, {compared} (mean over seeds, {spread})"
     atomic_write_bytes(sweep_folder / "modes.png", modes_png(curves, title))
     return result
+
+
+def _proportion_interval(values: np.ndarray) -> list[float] | None:
+    """The t-interval over seeds of a proportion's mean, kept inside [0, 1]."""
+    ci = statistics.t_interval(values)
+    return None if ci is None else [max(ci[0], 0.0), min(ci[1], 1.0)]

@@ -55,12 +55,10 @@ def reward_bars_png(result: dict[str, Any], run: str | None = None) -> bytes:
 
 
 def interval_words(seeds: int) -> str:
-    """What a plotted interval is, honestly: a bootstrap interval needs a few seeds; with two it
-    is only their spread."""
-    if seeds >= 3:
-        return f"95 % bootstrap interval over {seeds} seeds"
-    if seeds == 2:
-        return "bars span the 2 seeds (too few for a bootstrap interval)"
+    """What a plotted interval is, honestly: a t-interval over the seeds (with two, a wide
+    one); none for one seed."""
+    if seeds >= 2:
+        return f"95 % t-interval over {seeds} seeds"
     return "1 seed: no interval"
 
 
@@ -126,7 +124,7 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     conditions = list(curves)
     columns = min(5, len(conditions))
     rows = -(-len(conditions) // columns)
-    fig, axes = plt.subplots(2 * rows, columns, figsize=(3.4 * columns, 4.6 * rows + 0.6), squeeze=False)
+    fig, axes = plt.subplots(2 * rows, columns, figsize=(max(3.4 * columns, 5.6), 4.6 * rows + 0.6), squeeze=False)
     styles = {"hierarchical": "-", "flat": "--"}
     agent_colors = plt.get_cmap("tab10")
     kinds = sorted({kind for c in curves.values() for kind in c})
@@ -154,8 +152,19 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     for j in range(len(conditions), rows * columns):
         axes[2 * (j // columns)][j % columns].set_visible(False)
         axes[2 * (j // columns) + 1][j % columns].set_visible(False)
-    kinds_text = ", ".join(f"{'solid' if k == 'hierarchical' else 'dashed'}: {k}" for k in kinds if k in styles)
-    fig.suptitle(f"Learning curves: mean over seeds, {interval_words(seeds)}\n{kinds_text}", fontsize=10)
+    per_kind = {kind: max(c[kind]["seeds"] for c in curves.values() if kind in c) for kind in kinds}
+    if len(set(per_kind.values())) > 1:
+        counts = ", ".join(f"{kind} {n}" for kind, n in per_kind.items())
+        heading = f"Learning curves: mean over seeds ({counts}), 95 % t-interval over seeds"
+    elif seeds > 1:
+        heading = f"Learning curves: mean over {seeds} seeds, {interval_words(seeds)}"
+    else:
+        heading = "Learning curves of one run (block means of the training episodes)"
+    if len(kinds) > 1:
+        heading += "\n" + ", ".join(
+            f"{'solid' if k == 'hierarchical' else 'dashed'}: {k}" for k in kinds if k in styles
+        )
+    fig.suptitle(heading, fontsize=10)
     fig.tight_layout()
     return _png(fig)
 
@@ -248,37 +257,118 @@ def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
 
 
 def budget_png(rows: list[dict[str, Any]]) -> bytes:
-    """Panel counts against the training budget: where the hierarchical predator is best, best
-    or tied with the best, and its interval above both baselines'; its mean ratio to the best
-    on a second axis."""
-    fig, ax = plt.subplots(figsize=(6.4, 3.8))
+    """The verdicts against the training budget: panels better, not resolved and worse (Holm-
+    corrected paired tests at each budget), and the strict count per seed (mean, least to most)
+    beside the paper's 16."""
+    fig, ax = plt.subplots(figsize=(7.0, 4.8))
     episodes = [r["episodes"] for r in rows]
     panels = rows[-1]["panels"]
-    for key, label, style in (
-        ("hierarchical_best_or_tied", "best or tied with the best", "s--"),
-        ("hierarchical_best", "best (the paper's count)", "o-"),
-        ("hierarchical_interval_above_both", "interval above both baselines", "^:"),
+    for key, label, style, color in (
+        ("better", "better (significant against both baselines)", "o-", TRAINED_COLOR),
+        ("not resolved", "not resolved", "s--", "grey"),
+        ("worse", "worse (a baseline significantly ahead)", "v-", "#c44e52"),
     ):
-        ax.plot(episodes, [r[key] for r in rows], style, label=label)
+        ax.plot(episodes, [r[key] for r in rows], style, color=color, label=label)
+    means = np.array([r["per_seed_mean"] for r in rows])
+    spread = [means - [r["per_seed_min"] for r in rows], [r["per_seed_max"] for r in rows] - means]
+    ax.errorbar(
+        episodes,
+        means,
+        yerr=spread,
+        fmt="D:",
+        color="black",
+        ms=4,
+        capsize=3,
+        label="strict count per seed: mean, least–most",
+    )
     ax.axhline(16, color="grey", lw=0.8, ls="-.")
-    ax.annotate("paper: best in 16 of 22", (episodes[0], 16), xytext=(3, 3), textcoords="offset points", fontsize=8)
+    ax.annotate("paper, one seed: 16", (episodes[0], 16), xytext=(3, 3), textcoords="offset points", fontsize=8)
     ax.set_xscale("log")
     ax.set_xticks(episodes, [str(e) for e in episodes])
     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_ylim(0, panels + 0.5)
     ax.set_xlabel("training episodes per run")
     ax.set_ylabel(f"panels (of {panels})")
-    ratio_ax = ax.twinx()
-    ratios = [r["mean_ratio_to_best"] for r in rows]
-    ratio_ax.plot(
-        episodes, [np.nan if r is None else r for r in ratios], "x-", color="grey", label="mean ratio to best"
-    )
-    ratio_ax.set_ylim(0, 1.05)
-    ratio_ax.set_ylabel("mean ratio to the best", color="grey")
-    lines = ax.get_legend_handles_labels()
-    extra = ratio_ax.get_legend_handles_labels()
-    ax.legend(lines[0] + extra[0], lines[1] + extra[1], fontsize=7, loc="lower right")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2)
+    ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_title("The hierarchical predator against the baselines, by training budget", fontsize=10)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def forest_png(rows: list[dict[str, Any]]) -> bytes:
+    """The paired differences (hierarchical minus baseline, mean over seeds), one row per panel
+    and baseline, at every budget evaluated (a marker each), each with its 95 % t-interval; rows
+    whose final-budget comparison is significant after Holm's correction are named in bold."""
+    budgets = sorted({int(b) for r in rows for b in r["budgets"]})
+    final = str(budgets[-1])
+    fig, ax = plt.subplots(figsize=(7.6, 0.2 * len(rows) + 1.6))
+    markers = ["o", "s", "D", "^", "v", "P"]
+    shades = plt.get_cmap("viridis")(np.linspace(0.85, 0.1, len(budgets)))
+    offsets = np.linspace(-0.3, 0.3, len(budgets))
+    for k, budget in enumerate(budgets):
+        key = str(budget)
+        y = [i + offsets[k] for i, r in enumerate(rows) if key in r["budgets"]]
+        entries = [r["budgets"][key] for r in rows if key in r["budgets"]]
+        means = np.array([e["mean"] for e in entries])
+        low = np.array([e["ci"][0] if e["ci"] else e["mean"] for e in entries])
+        high = np.array([e["ci"][1] if e["ci"] else e["mean"] for e in entries])
+        ax.errorbar(
+            means,
+            y,
+            xerr=[means - low, high - means],
+            fmt=markers[k % len(markers)],
+            color=shades[k],
+            ms=3.5,
+            elinewidth=1.4 if key == final else 0.7,
+            capsize=0,
+            label=f"{budget} episodes",
+        )
+    ax.axvline(0.0, color="black", lw=0.8)
+    ax.set_yticks(
+        range(len(rows)),
+        [
+            f"{r['condition']} {r['predator'].replace('predator_', 'p')} vs {r['baseline'].replace('always_', '')}"
+            for r in rows
+        ],
+        fontsize=6.5,
+    )
+    for label, r in zip(ax.get_yticklabels(), rows, strict=True):
+        e = r["budgets"].get(final, {})
+        if min(e.get("p_greater_holm", 1.0), e.get("p_less_holm", 1.0)) <= 0.025:
+            label.set_fontweight("bold")
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    ax.set_xlabel("hierarchical minus baseline: return per episode (mean over seeds, 95 % t-interval)", fontsize=8)
+    ax.legend(fontsize=7, loc="lower right", title="training budget", title_fontsize=7)
+    seeds = max((e["n"] for r in rows for e in r["budgets"].values()), default=0)
+    ax.set_title(
+        f"Hierarchical minus baseline, paired by seed ({seeds} seeds)\n"
+        f"bold: significant at {final} episodes after Holm's correction over {len(rows)} comparisons",
+        fontsize=9,
+    )
+    ax.tick_params(axis="x", labelsize=7)
+    ax.grid(axis="x", lw=0.3)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def counts_png(counts: dict[str, Any]) -> bytes:
+    """The paper's strict count one seed at a time: a bar per count, the mean and its 95 %
+    t-interval, and the paper's 16 (one seed)."""
+    fig, ax = plt.subplots(figsize=(6.0, 3.2))
+    values = np.array(counts["counts"])
+    edges = [k - 0.5 for k in range(counts["panels"] + 2)]
+    ax.hist(values, bins=edges, color=TRAINED_COLOR, rwidth=0.8, label=f"our seeds ({len(values)})")
+    ax.axvline(counts["mean"], color="black", lw=1.2, label=f"mean {counts['mean']:.1f}")
+    if counts["ci"]:
+        ax.axvspan(*counts["ci"], color="black", alpha=0.12, lw=0, label="95 % t-interval of the mean")
+    ax.axvline(counts["paper"], color="#c44e52", ls="--", lw=1.2, label=f"paper (one seed): {counts['paper']}")
+    ax.set_xlim(-0.5, counts["panels"] + 0.5)
+    ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
+    ax.set_xlabel(f"panels where the hierarchical predator beats both baselines (of {counts['panels']})", fontsize=8)
+    ax.set_ylabel("seeds")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title("The paper's strict count, counted on each seed alone", fontsize=10)
     fig.tight_layout()
     return _png(fig)
 
@@ -296,7 +386,9 @@ def law_png(result: dict[str, Any], title: str) -> bytes:
         for law, path in example["simulated"].items():
             path = np.array(path)
             ax.plot(path[:, 0], path[:, 1], "--", color=colors[law], lw=1, label=f"{law} (simulated)")
-        ax.set_aspect("equal")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x (arena units)", fontsize=8)
+        ax.set_ylabel("y (arena units)", fontsize=8)
         ax.set_title(f"a pursuit: best law {example['winner']}", fontsize=9)
         ax.tick_params(labelsize=7)
     if examples:
@@ -317,5 +409,77 @@ def law_png(result: dict[str, Any], title: str) -> bytes:
         ax.set_ylabel(f"fitted {label}, one dot per pursuit", fontsize=8)
         ax.set_title(f"{'proportional pursuit' if law == 'pp' else 'proportional navigation'}: {gain}", fontsize=9)
     fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def robust_png(result: dict[str, Any]) -> bytes:
+    """robust.png: per perturbation (rows) and condition (columns), the margin over the better
+    baseline against strength, one line per predator kind with its 95 % t-interval over seeds
+    (the unperturbed margin at the left); below, each condition's cross-play matrices (seed of
+    the predators × seed of the prey) as heat maps, when there are any."""
+    summary, crossplay = result["summary"], result["crossplay"]
+    conditions = list(summary)
+    ladders = result["ladders"]
+    kinds = sorted({k for c in summary.values() for k in c}, key=lambda k: (k != "hierarchical", k))
+    alone = len(conditions) == 1  # one condition: its ladders side by side, four to a row
+    columns = 4 if alone else len(conditions)
+    ladder_rows = -(-len(ladders) // 4) if alone else len(ladders)
+    rows = ladder_rows + (1 if crossplay else 0)
+    fig = plt.figure(figsize=(max(3.3 * columns + 0.6, 9.0), 2.1 * rows + 0.9))
+    grid = fig.add_gridspec(rows, columns)
+    for col, condition in enumerate(conditions):
+        for k, (name, levels) in enumerate(ladders.items()):
+            row, place = (k // 4, k % 4) if alone else (k, col)
+            ax = fig.add_subplot(grid[row, place])
+            for kind in kinds:
+                entry = summary[condition].get(kind)
+                if entry is None or name not in entry:
+                    continue
+                rungs = [{"value": 0, **entry["none"]}, *entry[name]]
+                x = np.arange(len(rungs))
+                y = np.array([r["margin"] for r in rungs])
+                color = VARIANT_COLORS.get(kind, "grey")
+                ax.plot(x, y, "o-", color=color, ms=3, lw=1.2, label=kind)
+                if all(r["ci"] for r in rungs):
+                    ax.fill_between(
+                        x, [r["ci"][0] for r in rungs], [r["ci"][1] for r in rungs], color=color, alpha=0.18, lw=0
+                    )
+            ax.axhline(0.0, color="black", lw=0.6)
+            neutral = "1" if name in ("damping", "predator-accel", "prey-accel") else "0"
+            ax.set_xticks(range(len(levels) + 1), [neutral, *(f"{v:g}" for v in levels)], fontsize=7)
+            ax.tick_params(axis="y", labelsize=7)
+            ax.set_xlabel(name, fontsize=8)
+            if place == 0:
+                ax.set_ylabel("margin over the\nbetter baseline", fontsize=7)
+            if row == 0 and (place == 0 or not alone):
+                ax.set_title(condition, fontsize=9)
+            if k == 0 and col == 0:
+                ax.legend(fontsize=6, loc="best")
+        if crossplay and condition in crossplay:
+            cells = grid[ladder_rows, col].subgridspec(1, len(crossplay[condition]), wspace=0.5)
+            for k, (kind, c) in enumerate(crossplay[condition].items()):
+                ax = fig.add_subplot(cells[0, k])
+                matrix = np.array(c["matrix"])
+                bound = max(abs(matrix).max(), 1e-6)
+                image = ax.imshow(matrix, cmap="RdBu", vmin=-bound, vmax=bound)
+                seeds = c["seeds"]
+                ax.set_xticks(range(len(seeds)), seeds, fontsize=6)
+                ax.set_yticks(range(len(seeds)), seeds, fontsize=6)
+                ax.set_xlabel("prey's seed", fontsize=7)
+                ax.set_ylabel("predators' seed", fontsize=7)
+                ax.set_title(f"{kind}: gap {c['gap']['mean']:+.2f}", fontsize=7)
+                fig.colorbar(image, ax=ax, fraction=0.046, pad=0.03).ax.tick_params(labelsize=5)
+    seeds = max((len(e["none"]["values"]) for c in summary.values() for e in c.values()), default=0)
+    fig.suptitle(
+        f"Margin over the better baseline under perturbations (mean over {seeds} seeds, 95 % t-interval; "
+        f"{result['episodes']} episodes per variant)"
+        + (
+            "\nbottom: cross-play margins, diagonal = self-play; gap = self-play minus held-out margin"
+            if crossplay
+            else ""
+        ),
+        fontsize=9,
+    )
     fig.tight_layout()
     return _png(fig)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench import guidance
+from pursuit_bench import guidance, statistics
 from pursuit_bench.agents.kinds import ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.evaluate import Actor, run_episodes
@@ -146,8 +146,6 @@ def analyse(
 def over_seeds(per_run: list[dict[str, Any]]) -> dict[str, Any]:
     """A sweep's law.json: per condition and predator kind, over seeds (runs), the mean of each
     run's median gains and its 95 % interval, and how often each law wins."""
-    from pursuit_bench.report import interval
-
     grouped: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for result in per_run:
         for kind, predators in result["kinds"].items():
@@ -160,7 +158,10 @@ def over_seeds(per_run: list[dict[str, Any]]) -> dict[str, Any]:
             law_entry: dict[str, Any] = {}
             for key in (*guidance.LAW_GAINS[law], "delay", "error"):
                 values = np.array([m[key] for m in medians])
-                law_entry[key] = {"mean": float(values.mean()) if len(values) else None, "ci": interval(values)}
+                law_entry[key] = {
+                    "mean": float(values.mean()) if len(values) else None,
+                    "ci": statistics.t_interval(values),
+                }
             law_entry["wins"] = float(np.mean([f["wins"][law] for f in fits])) if fits else None
             entry["laws"][law] = law_entry
         entry["winner"] = max(guidance.LAWS, key=lambda law: entry["laws"][law]["wins"] or 0.0)

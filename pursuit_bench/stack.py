@@ -20,6 +20,7 @@ from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.evaluate import evaluate_agents
 from pursuit_bench.files import atomic_write_bytes, atomic_write_text
+from pursuit_bench.perturbations import Perturbations
 from pursuit_bench.plots import reward_bars_png
 from pursuit_bench.recording import Recorder
 from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
@@ -175,6 +176,7 @@ def evaluate_into(
     record: bool = True,
     check: Callable[[], None] = lambda: None,
     predator_kind: str | None = None,
+    perturbations: Perturbations | None = None,
 ) -> dict[str, Any]:
     """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
     (with ``about`` and the training config), its bar chart and a recording to ``paths``
@@ -182,7 +184,8 @@ def evaluate_into(
     are complete, so an interruption leaves the previous ones as they were. ``check()`` is
     called before every step and once more before the files are put in place: an exception it
     raises stops the evaluation with the previous files untouched. ``predator_kind`` names the
-    predators in the result (default: the config's)."""
+    predators in the result (default: the config's); ``perturbations`` change the world and the
+    senses of every variant alike (:mod:`pursuit_bench.perturbations`)."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder = None
     try:
@@ -202,6 +205,7 @@ def evaluate_into(
             check=check,
             task_options=config.task_options,
             avoidance=config.avoids,
+            perturbations=perturbations,
         )
         result.update({**about, "training": config.to_dict()})
         if recorder is not None:

@@ -6,8 +6,8 @@
 ``--export`` writes the two sweeps' results into ``results/obstacles/avoidance`` and
 ``results/obstacles/plain`` (``report.export``: gzip JSON per run). Without it, the table (printed,
 markdown) and ``docs/figures/obstacles.png`` are made from those and, for the empty arena at the
-same budget, from ``results/reproduction`` (the hierarchical runs' 5000-episode checkpoints,
-the flat runs' final 4500 episodes).
+same budget, from ``results/obstacles/empty`` (the first reproduction sweep's runs of these
+conditions: the hierarchical runs' 5000-episode checkpoints, the flat runs' final 4500 episodes).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench import report
+from pursuit_bench import report, statistics
 from pursuit_bench.files import atomic_write_bytes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,8 +31,8 @@ VARIANTS = (
     ("hierarchical, avoidance", RESULTS / "avoidance", "hierarchical", None),
     ("hierarchical, plain navigation", RESULTS / "plain", "hierarchical", None),
     ("flat", RESULTS / "avoidance", "flat", None),
-    ("hierarchical, no obstacles", ROOT / "results" / "reproduction", "hierarchical", 5000),
-    ("flat, no obstacles", ROOT / "results" / "reproduction", "flat", None),
+    ("hierarchical, no obstacles", RESULTS / "empty", "hierarchical", 5000),
+    ("flat, no obstacles", RESULTS / "empty", "flat", None),
 )
 
 
@@ -42,7 +42,8 @@ def _evaluation(run: report.RunResult, budget: int | None) -> dict[str, Any]:
 
 def rows() -> list[dict[str, Any]]:
     """One row per condition and variant: means over seeds (and over predators) with 95 %
-    bootstrap intervals over seeds."""
+    t-intervals over seeds; the margin over the better baseline paired by seed, with the
+    one-sided p-value of its paired t-test."""
     loaded: dict[Path, list[report.RunResult]] = {}
     table = []
     for condition in CONDITIONS:
@@ -52,15 +53,17 @@ def rows() -> list[dict[str, Any]]:
             panels = [e["panels"] for e in chosen]
             trained = np.array([np.mean([p["trained"] for p in ps]) for ps in panels])
             best = np.array([np.mean([max(p["always_chase"], p["always_stalk"]) for p in ps]) for ps in panels])
+            paired = statistics.paired_difference(trained, best)  # seed by seed: same prey, same episodes
             row: dict[str, Any] = {
                 "condition": condition,
                 "variant": label,
                 "seeds": len(chosen),
                 "trained": float(trained.mean()),
-                "trained_interval": report.interval(trained),
+                "trained_interval": statistics.t_interval(trained),
                 "best_baseline": float(best.mean()),
-                "margin": float((trained - best).mean()),
-                "margin_interval": report.interval(trained - best),
+                "margin": paired["mean"],
+                "margin_interval": paired["ci"],
+                "margin_p_greater": paired["p_greater"],
                 "capture_rate": float(np.mean([e["capture_rate"] for e in chosen])),
                 "episode_length": float(np.mean([e["episode_length"] for e in chosen])),
             }
@@ -79,9 +82,9 @@ def _span(interval: list[float] | None) -> str:
 
 def markdown(table: list[dict[str, Any]]) -> str:
     lines = [
-        "| condition | predators | seeds | return as trained | best baseline | margin over it | captures "
-        "| collisions (contact steps) per predator-episode | the prey's |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| condition | predators | seeds | return as trained | best baseline | margin over it | p (margin > 0) "
+        "| captures | collisions (contact steps) per predator-episode | the prey's |",
+        "|---|---|---|---|---|---|---:|---|---|---|",
     ]
     for r in table:
         if "obstacle_collisions" in r:
@@ -92,7 +95,7 @@ def markdown(table: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {r['condition']} | {r['variant']} | {r['seeds']} | {r['trained']:+.3f}{_span(r['trained_interval'])} "
             f"| {r['best_baseline']:+.3f} | {r['margin']:+.3f}{_span(r['margin_interval'])} "
-            f"| {r['capture_rate']:.0%} | {hits} | {prey} |"
+            f"| {r['margin_p_greater']:.3f} | {r['capture_rate']:.0%} | {hits} | {prey} |"
         )
     return "\n".join(lines) + "\n"
 

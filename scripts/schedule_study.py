@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from pursuit_bench import statistics
 from pursuit_bench.agents.config import REPRODUCTION
 from pursuit_bench.evaluate import evaluate_agents
 from pursuit_bench.train import TrainConfig, Trainer
@@ -119,8 +120,8 @@ def figure(out: Path, png: Path) -> None:
     conditions = [c for c in CONDITIONS if any(r["condition"] == c for r in rows)]
     fig, axes = plt.subplots(2, len(conditions), figsize=(4.2 * len(conditions), 6.4), squeeze=False)
     print(
-        "| condition | variant | CPU-s per run (final) | predator margin, final | prey margin, final |"
-        " CPU-s to the reproduction preset's final quality |"
+        "| condition | variant | CPU-s per run (final) | predator margin, final [95 % t-interval, 3 seeds] |"
+        " prey margin, final [95 % t-interval] | CPU-s to the reproduction preset's final quality |"
     )
     print("|---|---|---:|---:|---:|---:|")
     for c, condition in enumerate(conditions):
@@ -141,10 +142,11 @@ def figure(out: Path, png: Path) -> None:
                 ax.axhline(0, color="grey", linewidth=0.5)
             final = _final(rows, name, condition)
             reached = _time_to(mine, seeds, ref) if ref is not None else None
-            print(
-                f"| {condition} | {name} | {final['cpu_s']:.0f} | {final['predator_margin']:+.3f} |"
-                f" {final['prey_margin']:+.3f} | {reached if reached is not None else 'not reached'} |"
-            )
+            spans = {k: _span(_final_values(rows, name, condition, k)) for k in ("predator_margin", "prey_margin")}
+            predator = f"{final['predator_margin']:+.3f}{spans['predator_margin']}"
+            prey = f"{final['prey_margin']:+.3f}{spans['prey_margin']}"
+            reached_text = reached if reached is not None else "not reached"
+            print(f"| {condition} | {name} | {final['cpu_s']:.0f} | {predator} | {prey} | {reached_text} |")
     shown: dict[str, Any] = {}
     for ax in axes.ravel():
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
@@ -169,6 +171,19 @@ def _final(rows: list[dict[str, Any]], name: str, condition: str) -> dict[str, f
     last = max(r["episodes"] for r in mine)
     at_end = [r for r in mine if r["episodes"] == last]
     return {k: float(np.mean([r[k] for r in at_end])) for k in ("cpu_s", "predator_margin", "prey_margin")}
+
+
+def _final_values(rows: list[dict[str, Any]], name: str, condition: str, key: str) -> list[float]:
+    """Each seed's ``key`` at the variant's last evaluation."""
+    mine = [r for r in rows if r["variant"] == name and r["condition"] == condition]
+    last = max(r["episodes"] for r in mine)
+    return [r[key] for r in mine if r["episodes"] == last]
+
+
+def _span(values: list[float]) -> str:
+    """The seeds' t-interval (pursuit_bench.statistics), as the table prints it."""
+    ci = statistics.t_interval(values)
+    return f" [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else ""
 
 
 def _time_to(rows: list[dict[str, Any]], seeds: list[int], ref: dict[str, float]) -> str | None:

@@ -73,7 +73,7 @@ def test_same_seed_same_eval(tmp_path: Path) -> None:
         (["train", "--episodes", "0"], "0 is not in the range 1<=x<=100000000"),
         (["train", "--episodes", "10000000000000"], "is not in the range 1<=x<=100000000"),
         (["train", "--no-record", "--record-every", "5"], "--record-every goes with recording"),
-        (["train", "--gamma", "1.5"], "gamma=1.5"),
+        (["train", "--gamma", "1.5"], "--gamma 1.5"),
         (["eval", "nowhere"], "nowhere: no such run folder"),
         (["view", "missing.rrd"], "missing.rrd: no such recording"),
         (["eval", "--pretrained", "1p-high", "--out", "a-file"], "--out a-file: exists and is not a folder"),

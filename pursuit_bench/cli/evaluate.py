@@ -52,6 +52,22 @@ from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
     help="Replace agent NAME (predator_0, …, prey_0) by the object MODULE:FACTORY() returns, with act(observation) "
     "(pursuit_bench/external.py), and evaluate it like a trained one. Repeatable.",
 )
+@click.option(
+    "--perturb",
+    "perturb",
+    multiple=True,
+    metavar="NAME=VALUE",
+    help="Evaluate in a perturbed world or with perturbed senses, every variant alike: obs-noise=σ, delay=k, "
+    "act-noise=p, damping=f, predator-accel=f, prey-accel=f, obstacles=N (docs/robustness.md). Repeatable; "
+    "writes eval-perturb-<…>.* unless --tag.",
+)
+@click.option(
+    "--opponents",
+    metavar="OTHER",
+    default=None,
+    help="Held-out opponents: RUN's predators against OTHER's prey (a run folder with as many predators, or "
+    "'scripted' for FleeingPrey), and RUN's prey against OTHER's predators; writes eval-vs-<OTHER>.* unless --tag.",
+)
 def evaluate(
     run: Path | None,
     pretrained: str | None,
@@ -64,23 +80,74 @@ def evaluate(
     threads: int,
     tag: str | None,
     agents: tuple[str, ...],
+    perturb: tuple[str, ...],
+    opponents: str | None,
 ) -> None:
     """Evaluate a trained RUN (or, with --pretrained, a shipped agent) by the paper's protocol;
     writes eval.json, eval.png and eval.rrd.
 
     The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
     the previous ones as they were (exit 130 or 143)."""
+    from pursuit_bench.perturbations import Perturbations
+
     folder = run_or_pretrained(run, pretrained, out)
     specs = _agent_specs(agents)
-    if specs and tag is None:
-        tag = "-".join(specs)  # eval-predator_0.json: the run's own eval.json stays its own
+    try:
+        perturbations = Perturbations.parse(perturb)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    if opponents is not None and opponents != "scripted" and not (Path(opponents) / "config.json").is_file():
+        raise BadInput(f"--opponents {opponents}: expected a run folder (with config.json) or 'scripted'")
+    if tag is None:  # the run's own eval.json stays its own
+        parts = [*specs, *([f"perturb-{perturbations.tag}"] if perturbations.changed else [])]
+        parts += [f"vs-{Path(opponents).name}"] if opponents is not None else []
+        tag = "-".join(parts) or None
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
+    settings["perturbations"] = perturbations
     try:
         paths = runs.eval_paths(folder, tag)
         with trained_agents(folder, pretrained, threads, obstacles) as (config, trained, about):
+            if opponents is not None:
+                trained, about = _held_out(config, trained, about, opponents, settings)
             _evaluate_run(folder, paths, config, trained, about, tag, settings, specs)
     except ValueError as error:  # RunBusy, a bad --agent, …
         raise BadInput(str(error)) from None
+
+
+def _held_out(
+    config: Any, agents: dict[str, Any], about: dict[str, Any], opponents: str, settings: dict[str, Any]
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The agents to evaluate against held-out opponents (the run's predators, OTHER's prey or
+    FleeingPrey), and ``about`` with the other side's result: OTHER's predators against the
+    run's prey by the same protocol (its ``prey_check`` scores the run's prey)."""
+    from pursuit_bench.agents.kinds import ScriptedAgent
+    from pursuit_bench.evaluate import evaluate_agents
+    from pursuit_bench.policies import FleeingPrey
+    from pursuit_bench.robustness import check_opponents
+
+    prey = agents["prey_0"]
+    if opponents == "scripted":
+        obstacles = bool(config.task_options.get("obstacles"))
+        return {**agents, "prey_0": ScriptedAgent("prey_0", FleeingPrey(obstacles=obstacles))}, {
+            **about,
+            "opponents": {"prey": "FleeingPrey"},
+        }
+    other_config, other, _ = runs.described(Path(opponents))
+    check_opponents(config, other_config)
+    prey_side = evaluate_agents(
+        config.condition,
+        {**{k: v for k, v in other.items() if k != "prey_0"}, "prey_0": prey},
+        episodes=settings["episodes"],
+        seed=settings["seed"],
+        num_envs=settings["num_envs"],
+        backend=config.backend,
+        predator_kind=other_config.predator,
+        task_options=config.task_options,
+        avoidance=other_config.avoids,
+        perturbations=settings["perturbations"],
+    )
+    held_out = {"prey": str(opponents), "prey_side": prey_side}
+    return {**agents, "prey_0": other["prey_0"]}, {**about, "opponents": held_out}
 
 
 def _agent_specs(values: tuple[str, ...]) -> dict[str, str]:
@@ -89,6 +156,8 @@ def _agent_specs(values: tuple[str, ...]) -> dict[str, str]:
         name, _, spec = value.partition("=")
         if not name or not spec:
             raise BadInput(f"--agent {value!r}: expected NAME=MODULE:FACTORY, e.g. predator_0=my_agents:make")
+        if name in specs:
+            raise BadInput(f"--agent {name}: given twice")
         specs[name] = spec
     return specs
 
@@ -134,6 +203,24 @@ def _evaluate_run(
             f"{panel['predator']}: {kind} {panel['trained']:+.3f}  "
             f"always-chase {panel['always_chase']:+.3f}  always-stalk {panel['always_stalk']:+.3f}"
         )
+    side = result.get("opponents", {}).get("prey_side")
+    if side is not None:
+        check = side["prey_check"]
+        click.echo(
+            f"the run's prey against {result['opponents']['prey']}'s predators: greedy return "
+            f"{check['learned_greedy']['return']:+.3f} "
+            f"(FleeingPrey in its place {check['fleeing_prey']['return']:+.3f})"
+        )
+    check = result.get("prey_check")
+    if check is not None:
+        who = result["prey_kind"] if result["prey_kind"].startswith("external") else "learned"
+        click.echo(
+            f"prey_0 ({who}), greedy: return {check['learned_greedy']['return']:+.3f}, caught "
+            f"{check['learned_greedy']['captured']:.0%} "
+            f"(FleeingPrey in its place: {check['fleeing_prey']['return']:+.3f})"
+        )
+    if result.get("perturbations"):
+        click.echo("perturbed: " + ", ".join(f"{k}={v:g}" for k, v in result["perturbations"].items()))
     click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")
     if settings["record"]:
         click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")

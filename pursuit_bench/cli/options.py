@@ -9,6 +9,8 @@ import contextlib
 import dataclasses
 import inspect
 import itertools
+import re
+import shutil
 import textwrap
 from collections.abc import Iterator
 from pathlib import Path
@@ -243,18 +245,28 @@ def run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | None
 @contextlib.contextmanager
 def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
     """Hold ``folder``'s lock: a RUN (checked to be one before a lock file is made in it), or the
-    results folder of --pretrained (made if missing). Imports nothing heavy: a refusal is quick."""
+    results folder of --pretrained (made if missing, and removed again, lock and all, if what ran
+    in it failed). Imports nothing heavy: a refusal is quick."""
     from pursuit_bench.files import locked as lock
 
+    made = False
     if pretrained is None:
+        if folder.exists() and not folder.is_dir():
+            raise BadInput(f"{folder}: a file, not a run folder")
         if not folder.is_dir():
             raise BadInput(f"{folder}: no such run folder")
         if not (folder / "config.json").is_file():
             raise BadInput(f"{folder}: not a pursuit-bench run folder (no config.json)")
     else:
+        made = not folder.exists()
         folder.mkdir(parents=True, exist_ok=True)
-    with lock(folder):
-        yield
+    try:
+        with lock(folder):
+            yield
+    except BaseException:
+        if made:
+            shutil.rmtree(folder, ignore_errors=True)
+        raise
 
 
 @contextlib.contextmanager
@@ -274,3 +286,16 @@ def trained_agents(
         torch.set_num_threads(threads)
         config, agents, about = runs.described(folder) if pretrained is None else shipped.described(pretrained)
         yield with_obstacles(config, obstacles), agents, about
+
+
+def in_option_words(error: Exception) -> str:
+    """A configuration's error as the user typed it: a message starting ``field_name=value:``
+    becomes ``--field-name value:`` (``keep_checkpoints=[500]`` -> ``--keep-checkpoints 500``)."""
+    text = str(error)
+    match = re.match(r"([a-z][a-z0-9_]*)=(\[[^\]]*\]|\S+?)(:.*)", text, re.DOTALL)
+    if match is None:
+        return text
+    name, value, rest = match.groups()
+    if value.startswith("["):
+        value = ",".join(v.strip() for v in value[1:-1].split(",") if v.strip())
+    return f"--{name.replace('_', '-')} {value}{rest}"

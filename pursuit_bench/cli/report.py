@@ -1,5 +1,5 @@
-"""``pursuit-bench report``: Fig. 2 over seeds, the learning curves, the panel count against
-budget and the convergence verdicts of a sweep (:func:`pursuit_bench.report.write`), or the
+"""``pursuit-bench report``: the claim judged panel by panel over a sweep's seeds (verdicts, paired
+differences, per-seed counts, power, convergence: :func:`pursuit_bench.report.write`), or the
 learning curves and a summary of one run.
 """
 
@@ -13,13 +13,14 @@ import click
 from pursuit_bench.cli.options import BadInput
 
 
-@click.command(short_help="Fig. 2, curves, budget and convergence of a sweep; curves of a run.")
+@click.command(short_help="A sweep's panels judged over seeds (better / not resolved / worse); a run's curves.")
 @click.argument("where", metavar="SWEEP|RESULTS|RUN", type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), default=None, help="Where to write [the folder given].")
 def report(where: Path, out: Path | None) -> None:
     """Fig. 2 over seeds from a sweep's run folders, or from its compact results (what
-    `scripts/export_results.py` writes): fig2.png, curves.png, budget.png, report.md and
-    report.json. On a RUN folder: its learning curves (curves.png) and a summary."""
+    `scripts/export_results.py` writes): report.md and report.json (the
+    panels' verdicts, paired differences, per-seed counts, power), fig2.png, forest.png,
+    counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary."""
     from pursuit_bench import report as reports
 
     if out is not None and out.exists() and not out.is_dir():
@@ -34,12 +35,14 @@ def report(where: Path, out: Path | None) -> None:
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(
-        f"{totals['panels']} panels: hierarchical best in {totals['hierarchical_best']}, best or tied with the best "
-        f"in {totals['hierarchical_best_or_tied']}, interval above both baselines in "
-        f"{totals['hierarchical_interval_above_both']}"
+        f"{totals['panels']} panels: {totals['better']} better, {totals['not resolved']} not resolved, "
+        f"{totals['worse']} worse (paired by seed, Holm-corrected); highest mean in {totals['hierarchical_best']}"
     )
     for row in totals["budgets"]:
-        click.echo(f"  at {row['episodes']} episodes: best in {row['hierarchical_best']} of {row['panels']}")
+        click.echo(
+            f"  at {row['episodes']} episodes: {row['better']} better, {row['not resolved']} not resolved, "
+            f"{row['worse']} worse"
+        )
     click.echo(f"written in {out or where}: {', '.join(totals['written'])}")
 
 
@@ -82,6 +85,9 @@ def _report_run(folder: Path, out: Path) -> None:
         click.echo(f"  learning curves: {out / 'curves.png'}")
     for path in sorted(folder.glob("eval*.json")):
         result_json = json.loads(path.read_text())
+        evaluated = result_json.get("trained_episodes")
+        if evaluated is not None and evaluated < len(rows) and not path.stem.startswith("eval-ep"):
+            click.echo(f"  {path.name}: stale, evaluated after {evaluated} episodes; the run has trained {len(rows)}")
         for panel in result_json["panels"]:
             click.echo(
                 f"  {path.name}: {panel['predator']} {result_json['predator_kind']} {panel['trained']:+.3f}, "

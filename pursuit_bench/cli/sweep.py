@@ -16,6 +16,7 @@ from pursuit_bench.cli.options import (
     PREDATOR_KINDS,
     BadInput,
     episode_counts,
+    in_option_words,
     names,
     recording_every,
     threads_option,
@@ -107,15 +108,19 @@ def sweep(
     checkpoints; Ctrl-C or SIGTERM checkpoints every stack (exit 130 or 143)."""
     import time
 
+    chosen = names(conditions, list(CONDITIONS), "conditions")  # refused before the heavy imports
+    kinds = names(predators, PREDATOR_KINDS, "predators")
+    kept = episode_counts(keep_checkpoints)
+
     from pursuit_bench import sweep as sweeps
 
     overrides = {k: v for k, v in hyperparameters.items() if v is not None}
     try:
         agent = PRESETS[preset].replace(**overrides)
         plan = sweeps.SweepPlan(
-            conditions=names(conditions, list(CONDITIONS), "conditions"),
+            conditions=chosen,
             seeds=seeds,
-            predators=names(predators, PREDATOR_KINDS, "predators"),
+            predators=kinds,
             agent=agent,
             episodes=episodes or agent.episodes,
             eval_episodes=eval_episodes,
@@ -124,14 +129,14 @@ def sweep(
             record_every=recording_every(no_record, record_every),
             checkpoint_every=checkpoint_every,
             preset=preset,
-            keep_checkpoints=episode_counts(keep_checkpoints),
+            keep_checkpoints=kept,
             obstacles=obstacles,
             obstacle_radius=obstacle_radius,
             avoidance=avoidance,
         )
         note = sweeps.open_sweep(out, plan)
     except ValueError as error:
-        raise BadInput(str(error)) from None
+        raise BadInput(in_option_words(error)) from None
     if note:
         click.echo(f"{out}: {note}", err=True)
     configs = plan.runs()

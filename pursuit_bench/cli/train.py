@@ -16,7 +16,14 @@ import click
 from click.core import ParameterSource
 
 from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS
-from pursuit_bench.cli.options import PREDATOR_KINDS, BadInput, recording_every, threads_option, training_options
+from pursuit_bench.cli.options import (
+    PREDATOR_KINDS,
+    BadInput,
+    in_option_words,
+    recording_every,
+    threads_option,
+    training_options,
+)
 from pursuit_bench.cli.progress import Progress
 from pursuit_bench.conditions import CONDITIONS
 from pursuit_bench.signals import SignalCatcher, Stopped
@@ -81,6 +88,11 @@ def _prepare_folder(out: Path, config: TrainConfig, settings: dict[str, Any], re
                 state = runs.load_checkpoint(out)
             except ValueError as error:
                 raise BadInput(f"cannot resume: {error}") from None
+            if state["episodes_done"] > config.episodes:
+                raise BadInput(
+                    f"--episodes {config.episodes}: {out} has already trained {state['episodes_done']} episodes; "
+                    "give at least that many"
+                )
         else:
             click.echo(f"{out}: no checkpoint yet; starting the run from its beginning", err=True)
         runs.write_config(out, config, settings)
@@ -213,7 +225,7 @@ def train(
                 avoidance=avoidance,
             )
         except ValueError as error:
-            raise BadInput(str(error)) from None
+            raise BadInput(in_option_words(error)) from None
         settings = {
             "preset": preset,
             "record_every": every,

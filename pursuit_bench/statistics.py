@@ -1,0 +1,252 @@
+"""Seed-level statistics: every interval, test and count the reports print comes from here.
+
+Seeds are the unit of replication. A trained predator and the baselines put in its place play
+the same evaluation episodes against the same prey of the same seed, so they are compared
+*paired by seed*: the seed-level difference of mean returns, its mean over seeds and a
+Student-t interval, a one-sided paired t-test per direction, and Holm's step-down correction
+over the family of comparisons a report counts. Intervals are t-intervals, not percentile
+bootstraps: at 3–10 seeds the percentile bootstrap under-covers (docs/statistics.md measures
+both). A bootstrap is kept where it is the right tool, for aggregates over panels: the
+probability of improvement (Agarwal et al. 2021, as rliable defines it: the Mann–Whitney
+statistic per panel, averaged over panels) with a stratified bootstrap over seeds (seeds
+resampled within each panel). rliable itself is not a dependency: it brings ``arch``, ``pandas``
+and ``seaborn`` for a statistic of a few lines (checked against ``scipy.stats.mannwhitneyu``
+in the tests).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+CONFIDENCE = 0.95
+#: Family-wise error per direction: a one-sided test at 0.025 matches a two-sided 95 %
+#: interval, so a comparison is called better (or worse) exactly when its interval, widened
+#: for the family by Holm's procedure, excludes zero on that side.
+ALPHA = 0.025
+RESAMPLES = 2000
+
+
+def t_interval(values: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE) -> list[float] | None:
+    """The Student-t interval of the mean of ``values`` (seeds); None below two values."""
+    x = np.asarray(values, dtype=float)
+    if x.ndim != 1:
+        raise ValueError(f"t_interval needs one value per seed (a 1-d array), got shape {x.shape}")
+    if len(x) < 2:
+        return None
+    half = float(stats.t.ppf(0.5 + confidence / 2, len(x) - 1) * x.std(ddof=1) / np.sqrt(len(x)))
+    return [float(x.mean()) - half, float(x.mean()) + half]
+
+
+def paired_difference(
+    ours: Sequence[float] | np.ndarray, theirs: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE
+) -> dict[str, Any]:
+    """``ours - theirs`` seed by seed (same seed, same episodes): the differences, their mean,
+    standard deviation, t-interval, t statistic and the one-sided p-values of the paired
+    t-test for ``ours > theirs`` (``p_greater``) and ``ours < theirs`` (``p_less``).
+
+    Seeds whose differences are all equal have no spread: the interval is that value and the
+    p-values are 0 or 1 (0.5 for a difference of exactly zero: a tie is never a win)."""
+    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
+    if a.shape != b.shape or a.ndim != 1:
+        raise ValueError(f"paired values need the same seeds: shapes {a.shape} and {b.shape}")
+    d = a - b
+    n = len(d)
+    mean = float(d.mean()) if n else float("nan")
+    sd = float(d.std(ddof=1)) if n > 1 else float("nan")
+    if n < 2:
+        t, p_greater = float("nan"), float("nan")
+    elif sd == 0:
+        t = float(np.sign(mean) * np.inf) if mean != 0 else 0.0
+        p_greater = 0.0 if mean > 0 else 1.0 if mean < 0 else 0.5
+    else:
+        t = mean / (sd / np.sqrt(n))
+        p_greater = float(stats.t.sf(t, n - 1))
+    p_less = 1.0 - p_greater  # the t distribution is continuous: the two tails add to one
+    return {
+        "n": n,
+        "differences": d.tolist(),
+        "mean": mean,
+        "sd": sd,
+        "ci": t_interval(d, confidence),
+        "t": float(t),
+        "p_greater": float(p_greater),
+        "p_less": float(p_less),
+    }
+
+
+def welch_difference(
+    ours: Sequence[float] | np.ndarray, theirs: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE
+) -> dict[str, Any]:
+    """``mean(ours) - mean(theirs)`` for two independent groups of seeds (other runs, other
+    prey: nothing to pair), with Welch's t-interval (Welch–Satterthwaite degrees of freedom) and
+    the two-sided p-value of Welch's test (as ``scipy.stats.ttest_ind(equal_var=False)``)."""
+    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
+    if len(a) < 2 or len(b) < 2:
+        raise ValueError(f"Welch's interval needs two or more seeds in each group, got {len(a)} and {len(b)}")
+    mean = float(a.mean() - b.mean())
+    va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
+    se = float(np.sqrt(va + vb))
+    if se == 0:
+        return {"mean": mean, "ci": [mean, mean], "p": 1.0 if mean == 0 else 0.0, "df": float("nan")}
+    df = float((va + vb) ** 2 / (va**2 / (len(a) - 1) + vb**2 / (len(b) - 1)))
+    half = float(stats.t.ppf(0.5 + confidence / 2, df) * se)
+    p = float(2 * stats.t.sf(abs(mean) / se, df))
+    return {"mean": mean, "ci": [mean - half, mean + half], "p": p, "df": df}
+
+
+def holm(pvalues: Sequence[float] | np.ndarray) -> np.ndarray:
+    """Holm's step-down adjusted p-values (in the given order): the smallest of m p-values times
+    m, the next times m - 1, …, each at least the one before it, at most 1. A hypothesis is
+    rejected at family-wise level α when its adjusted p-value is at most α."""
+    p = np.asarray(pvalues, dtype=float)
+    if np.any(np.isnan(p)) or np.any((p < 0) | (p > 1)):
+        raise ValueError(f"Holm needs p-values in [0, 1], got {p.tolist()}")
+    m = len(p)
+    order = np.argsort(p, kind="stable")
+    stepped = np.maximum.accumulate(np.minimum(1.0, (m - np.arange(m)) * p[order]))
+    adjusted = np.empty(m)
+    adjusted[order] = stepped
+    return adjusted
+
+
+def classify(comparisons: dict[str, dict[str, Any]], alpha: float = ALPHA) -> str:
+    """A panel's verdict from its comparisons with each baseline (:func:`paired_difference`
+    results carrying Holm-adjusted ``p_greater_holm`` and ``p_less_holm``): ``better`` when the
+    trained predator is significantly ahead of every baseline, ``worse`` when the baseline with
+    the higher mean is significantly ahead of it, else ``not resolved``."""
+    if all(c["p_greater_holm"] <= alpha for c in comparisons.values()):
+        return "better"
+    strongest = min(comparisons.values(), key=lambda c: c["mean"])  # the baseline furthest ahead
+    if strongest["p_less_holm"] <= alpha:
+        return "worse"
+    return "not resolved"
+
+
+def seeds_for_power(
+    sd: float, delta: float, alpha: float = ALPHA, power: float = 0.8, most: int = 100_000
+) -> int | None:
+    """The fewest seeds at which a one-sided paired t-test at level ``alpha`` detects a true
+    mean difference ``delta`` with probability ``power``, for seed-level differences of standard
+    deviation ``sd`` (the noncentral t); None if more than ``most`` are needed."""
+    if not (sd >= 0 and delta > 0 and 0 < alpha < 1 and 0 < power < 1):
+        raise ValueError(
+            f"seeds_for_power needs sd >= 0, delta > 0, alpha and power in (0, 1): got {sd}, {delta}, {alpha}, {power}"
+        )
+    if sd == 0:
+        return 2
+
+    def achieved(n: int) -> float:
+        df = n - 1
+        return float(stats.nct.sf(stats.t.ppf(1 - alpha, df), df, delta / (sd / np.sqrt(n))))
+
+    if achieved(most) < power:
+        return None
+    lo, hi = 2, most  # power rises with n: bisect for the first n that reaches it
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if achieved(mid) >= power:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+def detectable(sd: float, n: int, alpha: float = ALPHA, power: float = 0.8) -> float:
+    """The smallest true mean that a one-sided t-test over ``n`` values of spread ``sd`` detects
+    with probability ``power``: what a test that found nothing could have found."""
+    if n < 2:
+        return float("inf")
+    df = n - 1
+    critical = stats.t.ppf(1 - alpha, df)
+    lo, hi = 0.0, 1.0
+    while stats.nct.sf(critical, df, hi) < power:
+        hi *= 2
+    for _ in range(60):  # bisect the noncentrality
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if stats.nct.sf(critical, df, mid) < power else (lo, mid)
+    return float(hi * sd / np.sqrt(n))
+
+
+def _pairs_above(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The share of pairs (x_i, y_j) with x_i > y_j, ties half, over the last axis of each
+    (leading axes: resamples)."""
+    above = x[..., :, None] > y[..., None, :]
+    tied = x[..., :, None] == y[..., None, :]
+    return (above + 0.5 * tied).mean(axis=(-2, -1))
+
+
+def probability_of_improvement(xs: Sequence[np.ndarray], ys: Sequence[np.ndarray]) -> float:
+    """P(X > Y) averaged over panels (Agarwal et al. 2021): per panel the Mann–Whitney U of its
+    runs' scores over the number of pairs (ties count half), then the mean over panels."""
+    return float(
+        np.mean([_pairs_above(np.asarray(x, float), np.asarray(y, float)) for x, y in zip(xs, ys, strict=True)])
+    )
+
+
+def improvement_interval(
+    xs: Sequence[np.ndarray],
+    ys: Sequence[np.ndarray],
+    seed: int = 0,
+    resamples: int = RESAMPLES,
+    confidence: float = CONFIDENCE,
+) -> dict[str, Any]:
+    """:func:`probability_of_improvement` with a percentile interval from the stratified
+    bootstrap of Agarwal et al. (2021): each panel's runs of each variant resampled with
+    replacement within the panel, the statistic recomputed over all panels."""
+    rng = np.random.default_rng(seed)
+    draws = np.zeros(resamples)
+    for x, y in zip(xs, ys, strict=True):
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        rx = x[rng.integers(0, len(x), (resamples, len(x)))]
+        ry = y[rng.integers(0, len(y), (resamples, len(y)))]
+        draws += _pairs_above(rx, ry) / len(xs)
+    low, high = np.quantile(draws, [(1 - confidence) / 2, (1 + confidence) / 2])
+    return {
+        "value": probability_of_improvement(xs, ys),
+        "ci": [float(low), float(high)],
+        "panels": len(xs),
+        "resamples": resamples,
+    }
+
+
+def slope_test(curves: Sequence[np.ndarray], x: np.ndarray, tolerance: float, alpha: float = ALPHA) -> dict[str, Any]:
+    """Whether curves (one per seed, sampled at ``x``) still move: each seed's least-squares
+    slope, the slopes' mean over seeds with its t-interval, and the verdict ``rising``,
+    ``falling``, ``flat`` (the interval inside ±``tolerance``: an equivalence test) or ``not
+    resolved``; ``detectable`` is the slope the test finds with 80 % power, so a ``not
+    resolved`` says how large a trend could have gone unseen."""
+    slopes = np.array([np.polyfit(x, np.asarray(c, dtype=float), 1)[0] for c in curves])
+    ci = t_interval(slopes, 1 - 2 * alpha)
+    verdict = "not resolved"
+    if ci is not None:
+        if ci[0] > 0:
+            verdict = "rising"
+        elif ci[1] < 0:
+            verdict = "falling"
+        elif -tolerance < ci[0] and ci[1] < tolerance:
+            verdict = "flat"
+    sd = float(slopes.std(ddof=1)) if len(slopes) > 1 else float("nan")
+    return {
+        "slopes": slopes.tolist(),
+        "mean": float(slopes.mean()),
+        "ci": ci,
+        "tolerance": tolerance,
+        "verdict": verdict,
+        "detectable": detectable(sd, len(slopes), alpha) if len(slopes) > 1 else None,
+    }
+
+
+def coverage(draw: Any, truth: float, n: int, draws: int, seed: int = 0, confidence: float = CONFIDENCE) -> float:
+    """The fraction of ``draws`` samples of size ``n`` (``draw(rng, shape)``) whose t-interval
+    holds ``truth``: how often the interval :func:`t_interval` reports means what it says."""
+    rng = np.random.default_rng(seed)
+    samples = np.asarray(draw(rng, (draws, n)), dtype=float)
+    held = 0
+    for sample in samples:
+        low, high = t_interval(sample, confidence) or (np.nan, np.nan)
+        held += low <= truth <= high
+    return held / draws
