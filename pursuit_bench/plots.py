@@ -426,8 +426,9 @@ def robust_png(result: dict[str, Any]) -> bytes:
     columns = 4 if alone else len(conditions)
     ladder_rows = -(-len(ladders) // 4) if alone else len(ladders)
     rows = ladder_rows + (1 if crossplay else 0)
-    fig = plt.figure(figsize=(max(3.3 * columns + 0.6, 9.0), 2.1 * rows + 0.9))
-    grid = fig.add_gridspec(rows, columns)
+    heights = [1.0] * ladder_rows + ([1.4] if crossplay else [])
+    fig = plt.figure(figsize=(max(3.3 * columns + 0.6, 9.0), 2.1 * sum(heights) + 1.2))
+    grid = fig.add_gridspec(rows, columns, height_ratios=heights)
     for col, condition in enumerate(conditions):
         for k, (name, levels) in enumerate(ladders.items()):
             row, place = (k // 4, k % 4) if alone else (k, col)
@@ -481,5 +482,5 @@ def robust_png(result: dict[str, Any]) -> bytes:
         ),
         fontsize=9,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.9 / fig.get_figheight()))  # the two-line title keeps its room
     return _png(fig)
