@@ -41,22 +41,19 @@ def robust(
     rerunning the command goes on where it stopped."""
     import os
 
-    if len(folders) > 1:
-        if pretrained is not None or out is None:
-            raise click.UsageError("several folders go with --out (and without --pretrained)")
-        where = out
-        sources = [s for folder in folders for s in _sources(folder, None, conditions, seeds)]
-        where.mkdir(parents=True, exist_ok=True)
-    else:
-        if out is not None and pretrained is None and folders:
-            where = out
-            out.mkdir(parents=True, exist_ok=True)
-            sources = _sources(folders[0], None, conditions, seeds)
-        else:
-            where = run_or_pretrained(folders[0] if folders else None, pretrained, out)
-            sources = _sources(where, pretrained, conditions, seeds)
     if pretrained is not None:
-        where.mkdir(parents=True, exist_ok=True)
+        if folders:
+            raise click.UsageError("give RUN or SWEEP folders or --pretrained CONDITION, not both")
+        where = run_or_pretrained(None, pretrained, out)
+        sources = _sources(where, pretrained, conditions, seeds)
+    else:
+        if not folders:
+            raise click.UsageError("give a RUN or SWEEP folder (or several, with --out) or --pretrained CONDITION")
+        if len(folders) > 1 and out is None:
+            raise click.UsageError("several folders go with --out")
+        where = out or folders[0]
+        sources = [s for folder in folders for s in _sources(folder, None, conditions, seeds)]
+    where.mkdir(parents=True, exist_ok=True)
     from pursuit_bench import robustness
     from pursuit_bench.files import atomic_write_bytes, atomic_write_text
     from pursuit_bench.plots import robust_png
