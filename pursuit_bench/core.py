@@ -52,6 +52,11 @@ class PursuitCore:
             backend, num_arenas, config.n_agents, wall_rule=config.wall_rule, obstacles=config.obstacles
         )
         self.steps = np.zeros(num_arenas, dtype=np.int64)
+        # the dynamics factors (robustness tests), fixed by the config: None where unchanged
+        scale = np.full(config.n_agents, config.predator_accel_factor)
+        scale[-1] = config.prey_accel_factor
+        self._accel_scale = scale[None, :, None] if np.any(scale != 1.0) else None
+        self._extra_damping = (config.damping_factor - 1.0) * DAMPING if config.damping_factor != 1.0 else None
         self._los = np.zeros((num_arenas, config.n_agents, 2))  # LOS at the current positions
         # start layouts (and their obstacles) drawn ahead, per arena, with the generator they came from
         self._starts: dict[int, tuple[np.random.Generator, list[tuple[np.ndarray, np.ndarray]]]] = {}
@@ -134,13 +139,10 @@ class PursuitCore:
         scaled by its factor, and the damping shifted by an acceleration against the velocity
         (``(1 - f D) v + a DT == (1 - D) v + (a - (f - 1) D v / DT) DT``). Unchanged, the same
         array, when every factor is 1."""
-        c = self.config
-        if c.predator_accel_factor != 1.0 or c.prey_accel_factor != 1.0:
-            scale = np.full(c.n_agents, c.predator_accel_factor)
-            scale[-1] = c.prey_accel_factor
-            acc = acc * scale[None, :, None]
-        if c.damping_factor != 1.0:
-            acc = acc - (c.damping_factor - 1.0) * DAMPING * self.world.velocities / DT
+        if self._accel_scale is not None:
+            acc = acc * self._accel_scale
+        if self._extra_damping is not None:
+            acc = acc - self._extra_damping * self.world.velocities / DT
         return acc
 
     def _advance(self, acc: np.ndarray, modes: np.ndarray) -> StepResult:

@@ -55,7 +55,7 @@ class Perturbations:
         for f in fields(self):
             name, value = cli_name(f.name), getattr(self, f.name)
             low, high = RANGES[f.name]
-            integral = f.name in ("delay", "obstacles")
+            integral = f.name in INTEGRAL
             if isinstance(value, bool) or not isinstance(value, int if integral else (int, float)):
                 raise ValueError(f"{name}={value!r}: expected {'an integer' if integral else 'a number'}")
             if not low <= value <= high:
@@ -74,7 +74,7 @@ class Perturbations:
             key = names[name.strip()]
             if key in given:
                 raise ValueError(f"--perturb {name}: given twice")
-            integral = key in ("delay", "obstacles")
+            integral = key in INTEGRAL
             try:
                 given[key] = int(text) if integral else float(text)
             except ValueError:
@@ -119,6 +119,8 @@ class Perturbations:
         return bool(self.obs_noise or self.delay or self.act_noise or self.obstacles)
 
 
+#: The fields that count steps or obstacles: integers.
+INTEGRAL = ("delay", "obstacles")
 #: Each field's accepted range.
 RANGES: dict[str, tuple[float, float]] = {
     "obs_noise": (0.0, 1.0),

@@ -76,13 +76,9 @@ def _evaluate(
         agents,
         episodes=episodes,
         seed=seed,
-        prey_epsilon=0.1 if config.prey == "learning" else None,
-        backend=config.backend,
-        predator_kind=config.predator,
-        task_options=config.task_options,
-        avoidance=config.avoids,
         perturbations=perturbations,
         prey_check=False,
+        **config.protocol,
     )
     return margins(result)
 
@@ -108,28 +104,29 @@ def check_opponents(config: Any, other: Any) -> None:
         raise ValueError("opponents: the two runs' agents observe differently (wall features or obstacles differ)")
 
 
-def _job(args: tuple[str, Path | str, Path | str, dict[str, Any], int, int]) -> tuple[str, dict[str, Any]]:
+def _job(args: tuple[str, Path | str, Path | str, Perturbations, int, int]) -> tuple[str, dict[str, Any]]:
     key, predators_from, prey_from, changes, episodes, seed = args
-    return key, _evaluate(predators_from, prey_from, Perturbations(**changes), episodes, seed)
+    return key, _evaluate(predators_from, prey_from, changes, episodes, seed)
 
 
 def _jobs(sources: list[dict[str, Any]], episodes: int, seed: int, crossplay: bool) -> list[tuple[Any, ...]]:
     jobs: list[tuple[Any, ...]] = []
     for s in sources:
         trained_with_obstacles = bool(s["config"].task_options.get("obstacles"))
-        jobs.append((f"{s['name']}|{NONE}", s["source"], s["source"], {}, episodes, seed))
+        jobs.append((f"{s['name']}|{NONE}", s["source"], s["source"], Perturbations(), episodes, seed))
         for name, levels in LADDERS.items():
             if name == "obstacles" and trained_with_obstacles:
                 continue
             for value in levels:
-                changes = perturbation(name, value)
-                fields = {k: getattr(changes, k) for k in changes.__dataclass_fields__}
-                jobs.append((f"{s['name']}|{name}={value:g}", s["source"], s["source"], fields, episodes, seed))
+                key = f"{s['name']}|{name}={value:g}"
+                jobs.append((key, s["source"], s["source"], perturbation(name, value), episodes, seed))
     if crossplay:
         for s in sources:
             for o in sources:
                 if o is not s and (s["condition"], s["kind"]) == (o["condition"], o["kind"]):
-                    jobs.append((f"{s['name']}|vs|{o['name']}", s["source"], o["source"], {}, episodes, seed))
+                    jobs.append(
+                        (f"{s['name']}|vs|{o['name']}", s["source"], o["source"], Perturbations(), episodes, seed)
+                    )
     return jobs
 
 

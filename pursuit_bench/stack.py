@@ -197,15 +197,11 @@ def evaluate_into(
             agents,  # type: ignore[arg-type]
             episodes=episodes,
             seed=seed,
-            prey_epsilon=0.1 if config.prey == "learning" else None,
             num_envs=num_envs,
             recorder=recorder,
-            backend=config.backend,
-            predator_kind=predator_kind or config.predator,
             check=check,
-            task_options=config.task_options,
-            avoidance=config.avoids,
             perturbations=perturbations,
+            **{**config.protocol, "predator_kind": predator_kind or config.predator},
         )
         result.update({**about, "training": config.to_dict()})
         if recorder is not None:

@@ -84,6 +84,19 @@ class TrainConfig:
         ``avoidance`` is on)."""
         return self.avoidance and self.obstacles > 0
 
+    @property
+    def protocol(self) -> dict[str, Any]:
+        """``evaluate_agents``' options for this run's agents: the learned prey's ε (the paper's
+        0.1; none for a scripted prey), the physics, the predators' kind, the obstacles and
+        whether the baselines avoid them."""
+        return {
+            "prey_epsilon": 0.1 if self.prey == "learning" else None,
+            "backend": self.backend,
+            "predator_kind": self.predator,
+            "task_options": self.task_options,
+            "avoidance": self.avoids,
+        }
+
     def to_dict(self) -> dict[str, Any]:
         return {**dataclasses.asdict(self), "agent": self.agent.to_dict()}
 
