@@ -373,44 +373,97 @@ def counts_png(counts: dict[str, Any]) -> bytes:
     return _png(fig)
 
 
+LAW_COLORS = {"none": "#8c8c8c", "pp": "#dd8452", "pn": "#55a868", "mixed": "#8172b3", "parallel": "#c44e52"}
+
+
 def law_png(result: dict[str, Any], title: str) -> bytes:
-    """law.png: measured against simulated trajectories for a few pursuits (left), and the
-    fitted gains per predator kind, proportional pursuit's K and navigation's N (right)."""
+    """law.png, top: a few segments over their episodes (the episode faint, the segment bold
+    from its onset, each law's simulation dashed); bottom: per predator kind and phase, the
+    share of segments each law is chosen for, and proportional navigation's N per segment
+    (interior fits as dots, fits at the bound as triangles at it)."""
     examples: list[dict[str, Any]] = next(iter(result["examples"].values()), [])
-    fig, axes = plt.subplots(1, len(examples) + 2, figsize=(3.6 * (len(examples) + 2), 3.8), squeeze=False)
-    colors = {"pp": "#dd8452", "pn": "#55a868", "mixed": "#8172b3"}
-    for ax, example in zip(axes[0], examples, strict=False):
-        pursuer, target = np.array(example["pursuer"]), np.array(example["target"])
-        ax.plot(target[:, 0], target[:, 1], color="#4c72b0", lw=1.5, label="prey")
-        ax.plot(pursuer[:, 0], pursuer[:, 1], color="black", lw=2, label="predator (measured)")
+    bounds = result.get("gain_bounds", {"N": [0.0, 15.0]})
+    fig = plt.figure(figsize=(11.5, 7.6))
+    grid = fig.add_gridspec(2, max(len(examples), 1) * 2, height_ratios=[1.15, 1.0])
+    width = 2
+    for k, example in enumerate(examples):
+        ax = fig.add_subplot(grid[0, k * width : (k + 1) * width])
+        episode_p, episode_t = np.array(example["episode_pursuer"]), np.array(example["episode_target"])
+        pursuer, target, start = np.array(example["pursuer"]), np.array(example["target"]), example["start"]
+        ax.plot(episode_t[:, 0], episode_t[:, 1], color="#4c72b0", lw=0.8, alpha=0.35)
+        ax.plot(episode_p[:, 0], episode_p[:, 1], color="black", lw=0.8, alpha=0.35)
+        ax.plot(target[start:, 0], target[start:, 1], color="#4c72b0", lw=1.8, label="prey")
+        ax.plot(pursuer[start:, 0], pursuer[start:, 1], color="black", lw=2, label="predator (measured)")
+        ax.plot(*pursuer[start], "o", color="black", ms=4)
         for law, path in example["simulated"].items():
-            path = np.array(path)
-            ax.plot(path[:, 0], path[:, 1], "--", color=colors[law], lw=1, label=f"{law} (simulated)")
+            path = np.array(path)[start:]
+            ax.plot(path[:, 0], path[:, 1], "--", color=LAW_COLORS[law], lw=1, label=f"{law} (simulated)")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("x (arena units)", fontsize=8)
         ax.set_ylabel("y (arena units)", fontsize=8)
-        ax.set_title(f"a pursuit: best law {example['winner']}", fontsize=9)
+        ax.set_title(
+            f"episode {example['episode'] + 1}, {example['phase']} from step {example['onset']}: "
+            f"chosen {example['chosen']}",
+            fontsize=8,
+        )
         ax.tick_params(labelsize=7)
-    if examples:
-        axes[0][0].legend(fontsize=6)
-    for ax, (law, gain, label) in zip(
-        axes[0][len(examples) :], (("pp", "K", "K (1/s)"), ("pn", "N", "N")), strict=True
-    ):
-        kinds = list(result["kinds"])
-        data = [
-            [g for predator in result["kinds"][k].values() for g in predator["laws"][law]["gains"][gain]] for k in kinds
-        ]
-        for x, values in enumerate(data):
-            jitter = np.random.default_rng(x).uniform(-0.15, 0.15, len(values))
-            ax.scatter(x + jitter, values, s=5, alpha=0.5)
-            if values:
-                ax.plot([x - 0.3, x + 0.3], [np.median(values)] * 2, color="black", lw=2)
-        ax.set_xticks(range(len(kinds)), [k.replace("_", " ") for k in kinds], rotation=25, fontsize=7)
-        ax.set_ylabel(f"fitted {label}, one dot per pursuit", fontsize=8)
-        ax.set_title(f"{'proportional pursuit' if law == 'pp' else 'proportional navigation'}: {gain}", fontsize=9)
+        if k == 0:
+            ax.legend(fontsize=6, loc="best")
+    rows = [
+        (kind, phase, fits[phase])
+        for kind, predators in result["kinds"].items()
+        for phase in ("chase", "stalk")
+        for fits in [_pooled(predators, phase)]
+        if fits[phase]["attacks"]
+    ]
+    half = max(len(examples), 1)
+    share_ax = fig.add_subplot(grid[1, :half])
+    gain_ax = fig.add_subplot(grid[1, half:])
+    labels = [f"{kind.replace('_', ' ')}\n{phase} ({entry['attacks']})" for kind, phase, entry in rows]
+    bottom = np.zeros(len(rows))
+    for law, color in LAW_COLORS.items():
+        shares = np.array([entry["share"][law] for _, _, entry in rows])
+        share_ax.bar(range(len(rows)), shares, bottom=bottom, color=color, label=law, width=0.7)
+        bottom += shares
+    share_ax.set_xticks(range(len(rows)), labels, fontsize=7, rotation=20)
+    share_ax.set_ylabel("share of segments: law chosen (BIC)", fontsize=8)
+    share_ax.set_ylim(0, 1)
+    share_ax.legend(fontsize=6, ncol=5, loc="upper center", bbox_to_anchor=(0.5, 1.13))
+    share_ax.tick_params(axis="y", labelsize=7)
+    high = bounds["N"][1]
+    for x, (_, _, entry) in enumerate(rows):
+        pn = entry["laws"]["pn"]
+        values = np.array(pn["gains"]["N"])
+        at_upper = np.array([c.get("N") == "upper" for c in pn["censored"]], dtype=bool)
+        at_lower = np.array([c.get("N") == "lower" for c in pn["censored"]], dtype=bool)
+        inner = ~(at_upper | at_lower)
+        jitter = np.random.default_rng(x).uniform(-0.15, 0.15, len(values))
+        gain_ax.scatter(x + jitter[inner], values[inner], s=7, alpha=0.6, color="#55a868")
+        gain_ax.scatter(x + jitter[at_upper], np.full(at_upper.sum(), high), marker="^", s=12, color="#c44e52")
+        gain_ax.scatter(x + jitter[at_lower], np.zeros(at_lower.sum()), marker="v", s=12, color="#8c8c8c")
+        if inner.any():
+            gain_ax.plot([x - 0.3, x + 0.3], [np.median(values[inner])] * 2, color="black", lw=2)
+    gain_ax.set_xticks(range(len(rows)), labels, fontsize=7, rotation=20)
+    gain_ax.set_ylabel(
+        f"proportional navigation's N per segment\n(triangles: at the bound, >{high:g} or 0)", fontsize=8
+    )
+    gain_ax.set_ylim(-0.8, high + 1.2)
+    gain_ax.tick_params(axis="y", labelsize=7)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return _png(fig)
+
+
+def _pooled(predators: dict[str, Any], phase: str) -> dict[str, Any]:
+    """One kind's predators' fits of one phase pooled (shares recomputed over every segment)."""
+    entries = [fits[phase] for fits in predators.values()]
+    chosen = [c for e in entries for c in e["chosen"]]
+    pn = {
+        "gains": {"N": [v for e in entries for v in e["laws"]["pn"]["gains"]["N"]]},
+        "censored": [c for e in entries for c in e["laws"]["pn"]["censored"]],
+    }
+    share = {law: chosen.count(law) / len(chosen) if chosen else 0.0 for law in LAW_COLORS}
+    return {phase: {"attacks": len(chosen), "share": share, "laws": {"pn": pn}}}
 
 
 def robust_png(result: dict[str, Any]) -> bytes:

@@ -1,5 +1,6 @@
-"""Pursuit-law fits against known answers: pursuits made by each law, in discrete steps and in
-continuous time sampled at 10 Hz, with noise; degenerate inputs refused."""
+"""Pursuit-law fits against known answers: continuous-time synthetic attacks by each law sampled at
+10 Hz with noise, our own predators whose rule we know, a naive reference of the simulation, the
+delay buying no data, censored gains and degenerate input."""
 
 import json
 from pathlib import Path
@@ -8,121 +9,156 @@ import numpy as np
 import pytest
 from cli_helpers import run_cli
 
-from pursuit_bench import guidance
+from pursuit_bench import guidance, pretrained, pursuit_laws
 from pursuit_bench.agents.kinds import ScriptedAgent
-from pursuit_bench.evaluate import run_episodes
-from pursuit_bench.policies import FleeingPrey, PurePursuitPredator
+from pursuit_bench.policies import AlwaysChase, PurePursuitPredator
+from pursuit_bench.synthetic_attacks import TrueLaw, attack
 
 DT = 0.1
+ATTACKS = 5
+#: (true law, whether the criterion must choose it in >= 4 of 5 attacks)
+CASES = [
+    (TrueLaw("pp", k_gain=1.0), True),
+    (TrueLaw("pp", k_gain=3.0), True),
+    (TrueLaw("pp", k_gain=2.0, delay=0.1), True),
+    (TrueLaw("pn", n_gain=2.0), True),
+    (TrueLaw("pn", n_gain=3.0, delay=0.1), True),
+    (TrueLaw("pn", n_gain=5.0, delay=0.1), True),
+    (TrueLaw("pn", n_gain=5.0, delay=0.2), False),  # chosen in 3 of 5: docs/pursuit-law.md
+    (TrueLaw("mixed", n_gain=2.5, k_gain=2.0, delay=0.1), False),  # not identified: docs/pursuit-law.md
+    (TrueLaw("parallel"), True),
+    (TrueLaw("parallel", delay=0.2), True),
+    (TrueLaw("none"), True),
+]
 
 
-def manoeuvring_target(t: np.ndarray) -> np.ndarray:
-    """A target weaving across the arena at about 0.7 units/s."""
-    return np.stack([-0.2 + 0.5 * t, 0.6 * np.sin(1.3 * t)], axis=1)
+@pytest.mark.parametrize(("true", "identified"), CASES, ids=lambda c: str(c) if isinstance(c, TrueLaw) else "")
+def test_synthetic_attacks_are_recovered(true: TrueLaw, identified: bool) -> None:
+    chosen, own = [], []
+    for seed in range(ATTACKS):
+        selection = guidance.select(*attack(true, seed), DT)
+        chosen.append(selection.chosen.law)
+        own.append(selection.fits[true.law])
+    if identified:
+        assert sum(c == true.law for c in chosen) >= 4, chosen
+    else:  # the law or a single law it holds, never one it does not
+        assert set(chosen) <= {true.law, "pn", "pp", "mixed"} and "pn" in chosen, chosen
+    for name, value in (("N", true.n_gain), ("K", true.k_gain)):
+        if name in guidance.LAW_GAINS[true.law] and (true.law != "mixed" or name == "N"):
+            close = [abs(f.gains[name] - value) <= 0.15 * value for f in own]
+            assert sum(close) >= 4, [f.gains for f in own]
+    assert sum(abs(f.delay - true.delay) <= DT + 1e-9 for f in own) >= 4, [f.delay for f in own]
 
 
-def law_pursuit(n_gain: float, k_gain: float, delay: float, step: float, duration: float) -> np.ndarray:
-    """A naive reference: the law ω = N λ̇ + K δ integrated by Euler steps of ``step`` seconds
-    at a constant speed of 1.2 from (−1.2, −1.0), heading 1.5 rad, the delayed state read from the
-    past (held at the start before it exists), until the pursuer is within 0.05 of the target.
-    Returns (pursuer, target) at every step."""
-    times = np.arange(0.0, duration + 1e-9, step)
-    target = manoeuvring_target(times)
-    lag = round(delay / step)
-    position = np.array([-1.2, -1.0])
-    heading = 1.5  # across the line of sight: the law has to turn the pursuer
-    positions, headings, lines = [], [], []
-    for t in range(len(times)):
-        positions.append(position.copy())
-        if np.linalg.norm(target[t] - position) < 0.05:  # caught: the pursuit ends
-            break
-        los = np.arctan2(*(target[t] - position)[::-1])
-        lines.append(los)
-        headings.append(heading)
-        i = max(t - lag, 0)
-        previous = lines[i - 1] if i > 0 else lines[0]
-        los_rate = np.angle(np.exp(1j * (lines[i] - previous))) / step
-        between = headings[i] - np.angle(np.exp(1j * (headings[i] - headings[i - 1]))) / 2 if i > 0 else headings[i]
-        deviation = np.angle(np.exp(1j * (lines[i] - between)))
-        heading = heading + step * (n_gain * los_rate + k_gain * deviation)
-        position = position + step * 1.2 * np.array([np.cos(headings[-1]), np.sin(headings[-1])])
-    return np.array(positions), target[: len(positions)]
+def naive_simulation(law, n_gain, k_gain, delay_steps, heading0, pursuer, target, start, substeps):
+    """The simulation as the module's text states it, one plain loop per sub-step."""
+    fine_p = [
+        pursuer[t] + (j / substeps) * (pursuer[t + 1] - pursuer[t])
+        for t in range(len(pursuer) - 1)
+        for j in range(substeps)
+    ]
+    fine_t = [
+        target[t] + (j / substeps) * (target[t + 1] - target[t])
+        for t in range(len(target) - 1)
+        for j in range(substeps)
+    ]
+    fine_p.append(pursuer[-1])
+    fine_t.append(target[-1])
+    h = DT / substeps
+    speed = [np.linalg.norm(pursuer[u // substeps + 1] - pursuer[u // substeps]) / DT for u in range(len(fine_p) - 1)]
+    chord = [np.arctan2(*(pursuer[u // substeps + 1] - pursuer[u // substeps])[::-1]) for u in range(len(fine_p) - 1)]
+    velocity = [(target[u // substeps + 1] - target[u // substeps]) / DT for u in range(len(fine_p) - 1)]
+    los = [np.arctan2(*(fine_t[u] - fine_p[u])[::-1]) for u in range(len(fine_p))]
+    heading = list(chord)
+    first, lag = start * substeps, delay_steps * substeps
+    position = np.array(pursuer[start], dtype=float)
+    out = [np.array(p) for p in pursuer[: start + 1]]
+    for u in range(first, len(fine_p) - 1):
+        los[u] = np.arctan2(*(fine_t[u] - position)[::-1])
+        if law == "parallel":
+            i = max(u - lag, 0)
+            across = -velocity[i][0] * np.sin(los[i]) + velocity[i][1] * np.cos(los[i])
+            heading[u] = los[i] + np.arcsin(np.clip(across / speed[i], -1, 1))
+        elif u == first:
+            heading[u] = heading0
+        elif law == "none":
+            heading[u] = heading[u - 1]
+        else:
+            i = max(u - 1 - lag, 1)
+            rate = np.angle(np.exp(1j * (los[i] - los[i - 1]))) / h
+            deviation = np.angle(np.exp(1j * (los[i] - heading[i])))
+            heading[u] = heading[u - 1] + h * (n_gain * rate + k_gain * deviation)
+        moving = heading[u] + 0.5 * (heading[u] - heading[u - 1]) if u > first else heading[u]
+        position = position + h * speed[u] * np.array([np.cos(moving), np.sin(moving)])
+        if (u + 1) % substeps == 0:
+            out.append(position.copy())
+    return np.array(out)
 
 
-def sampled(n_gain: float, k_gain: float, delay: float, fine: bool, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    step = 0.001 if fine else DT
-    pursuer, target = law_pursuit(n_gain, k_gain, delay, step, 3.0)
-    every = round(DT / step)
-    pursuer, target = pursuer[::every], target[::every]
-    noise = np.random.default_rng(seed).normal(scale=0.001, size=pursuer.shape)  # 0.05 % of the arena
-    return pursuer + noise, target
-
-
-CASES = [("pp", 0.0, 3.0, 0.0), ("pp", 0.0, 2.0, 0.2), ("pn", 3.0, 0.0, 0.0), ("pn", 4.0, 0.0, 0.1)]
-CASES += [("mixed", 2.5, 2.0, 0.1)]
-
-
-@pytest.mark.parametrize(("law", "n_gain", "k_gain", "delay"), CASES)
-def test_gains_and_delays_of_discrete_pursuits_are_recovered(law: str, n_gain: float, k_gain: float, delay: float):
-    pursuer, target = sampled(n_gain, k_gain, delay, fine=False, seed=1)
-    fits = guidance.fit_all(pursuer, target, DT)
-    result = fits[law]
-    for name, true in (("N", n_gain), ("K", k_gain)):
-        if name in result.gains:
-            assert result.gains[name] == pytest.approx(true, rel=0.10), result
-    assert result.delay == pytest.approx(delay)
-    assert result.r2 > 0.99 and result.error < 0.01
-    assert guidance.winner(fits) == law, {k: f.error for k, f in fits.items()}
-
-
-@pytest.mark.parametrize(("law", "n_gain", "k_gain", "delay"), CASES)
-def test_continuous_pursuits_sampled_at_10_hz_are_recovered(law: str, n_gain: float, k_gain: float, delay: float):
-    pursuer, target = sampled(n_gain, k_gain, delay, fine=True, seed=2)
-    fits = guidance.fit_all(pursuer, target, DT)
-    result = fits[law]
-    for name, true in (("N", n_gain), ("K", k_gain)):
-        if name in result.gains:
-            assert result.gains[name] == pytest.approx(true, rel=0.25), result
-    assert abs(result.delay - delay) <= DT + 1e-9
-    if law == "mixed":
-        assert guidance.winner(fits) == "mixed", {k: f.error for k, f in fits.items()}
-    else:  # the right single law wins; the mixed one, holding it, may fit the sampling a little better
-        assert min(("pp", "pn"), key=lambda k: fits[k].error) == law, {k: f.error for k, f in fits.items()}
-
-
-def test_simulate_reproduces_the_reference_exactly_without_noise() -> None:
-    pursuer, target = law_pursuit(3.0, 1.0, 0.2, DT, 3.0)
-    simulated = guidance.simulate("mixed", {"N": 3.0, "K": 1.0}, 0.2, pursuer, target, DT)
-    np.testing.assert_allclose(simulated, pursuer, atol=1e-9)
-
-
-def test_the_pure_pursuit_predator_is_best_described_by_proportional_pursuit() -> None:
-    positions: list[np.ndarray] = []
-    run_episodes(
-        "1p-high",
-        {
-            "predator_0": ScriptedAgent("predator_0", PurePursuitPredator()),
-            "prey_0": ScriptedAgent("prey_0", FleeingPrey()),
-        },
-        1,
-        seed=4,
-        num_envs=1,
-        on_step=lambda obs, actions, done: positions.append(obs[0, :, 0:2].copy()),
+@pytest.mark.parametrize("law", guidance.LAWS)
+def test_simulate_matches_a_naive_reference(law: str) -> None:
+    pursuer, target = attack(TrueLaw("mixed", n_gain=2.0, k_gain=1.0, delay=0.1), seed=3)
+    gains = {"none": {}, "pp": {"K": 1.5}, "pn": {"N": 3.0}, "mixed": {"N": 2.0, "K": 1.0}, "parallel": {}}[law]
+    simulated = guidance.simulate(law, gains, 0.2, pursuer, target, DT, start=4, heading=0.3)
+    reference = naive_simulation(
+        law, gains.get("N", 0.0), gains.get("K", 0.0), 2, 0.3, pursuer, target, 4, guidance.SUBSTEPS
     )
-    track = np.array(positions)  # (T, agents, 2): each agent's own position as it observes it
-    assert len(track) >= 10
-    fits = guidance.fit_all(track[:, 0], track[:, 1], DT)
-    assert guidance.winner(fits) == "pp", {k: (f.error, f.gains) for k, f in fits.items()}
-    assert fits["pp"].r2 > 0.9
+    np.testing.assert_allclose(simulated, reference, atol=1e-9)
 
 
-def test_a_straight_line_target_gets_an_answer() -> None:
-    times = np.arange(0, 2.0, DT)
-    target = np.stack([0.5 * times, np.full_like(times, 0.5)], axis=1)
-    pursuer = np.stack([0.9 * times - 0.5, 0.5 * times - 0.5], axis=1)
-    for result in guidance.fit_all(pursuer, target, DT).values():
-        assert np.isfinite(result.error) and np.isfinite(result.r2)
-        assert all(np.isfinite(v) for v in result.gains.values())
+def test_a_delay_buys_no_measured_heading() -> None:
+    """Without steering every delay gives the same simulation: all start at the same sample, so a
+    longer delay reads no more of the measured path."""
+    pursuer, target = attack(TrueLaw("pp", k_gain=2.0), seed=0)
+    paths = [guidance.simulate("pn", {"N": 0.0}, d * DT, pursuer, target, DT, start=5) for d in range(6)]
+    for path in paths[1:]:
+        np.testing.assert_array_equal(path, paths[0])
+    assert (
+        len({guidance.fit(pursuer, target, DT, "none").samples, guidance.fit(pursuer, target, DT, "pp").samples}) == 1
+    )
+
+
+def test_navigation_by_an_ideal_parallel_pursuer_is_censored_at_the_bound() -> None:
+    fits = [guidance.fit(*attack(TrueLaw("parallel"), seed), DT, "pn") for seed in range(3)]
+    upper = [f for f in fits if f.censored.get("N") == "upper"]
+    assert upper, [f.gains for f in fits]
+    assert guidance.gain_text(upper[0], "N") == ">15"
+
+
+def play(condition: str, agents: dict, episodes: int) -> list[pursuit_laws.Segment]:
+    return pursuit_laws.attacks(condition, agents, episodes, seed=0)["predator_0"]
+
+
+def test_the_pure_pursuit_predator_is_found_to_pursue() -> None:
+    """Against the shipped prey, which weaves (a prey fleeing in a straight line makes pure
+    pursuit a straight line too: then ``"none"`` is chosen, rightly)."""
+    agents = {**pretrained.load("1p-low"), "predator_0": ScriptedAgent("predator_0", PurePursuitPredator())}
+    fits = pursuit_laws.fit_segments(play("1p-low", agents, 20))["chase"]
+    assert fits["attacks"] >= 5 and fits["winner"] == "pp", fits["share"]
+    assert fits["share"]["pp"] >= 0.6, fits["share"]
+
+
+def test_the_hierarchical_predators_chases_are_found_to_navigate_in_parallel() -> None:
+    """The shipped 1p-low predator's chase phases, and its lower layer alone (always-chase): the
+    ideal parallel course or proportional navigation at a high N chosen (which of the two most
+    varies with the episodes: docs/pursuit-law.md)."""
+    agents = pretrained.load("1p-low")
+    scripted = {**agents, "predator_0": ScriptedAgent("predator_0", AlwaysChase())}
+    for team in (agents, scripted):
+        fits = pursuit_laws.fit_segments(play("1p-low", team, 12))["chase"]
+        assert fits["attacks"] >= 8 and fits["winner"] in ("parallel", "pn"), fits["share"]
+        assert fits["share"]["parallel"] + fits["share"]["pn"] >= 0.8, fits["share"]
+        n_gain = fits["laws"]["pn"]["summary"]["N"]
+        assert n_gain["upper"] > 0.2 and (n_gain["median"] is None or n_gain["median"] > 5), n_gain
+
+
+def test_phases_bridge_short_interruptions() -> None:
+    modes = np.array([0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 0, 0, 0])
+    assert pursuit_laws.phases(modes) == [("stalk", 0, 2), ("chase", 3, 9), ("stalk", 10, 13)]
+    assert pursuit_laws.phases(np.array([0, 0, 1, 0, 0, 1, 1, 0, 0, 0])) == [
+        ("stalk", 0, 1), ("chase", 2, 6), ("stalk", 7, 9),
+    ]  # fmt: skip
+    assert pursuit_laws.phases(np.ones(5)) == [("chase", 0, 4)]
 
 
 def test_degenerate_input_is_refused_with_a_reason() -> None:
@@ -141,6 +177,10 @@ def test_degenerate_input_is_refused_with_a_reason() -> None:
         guidance.simulate("pp", {"K": 1.0}, 0.15, good, good + 1, DT)
     with pytest.raises(ValueError, match="expected two"):
         guidance.fit(good, good[:, :1], DT, "pp")
+    with pytest.raises(ValueError, match="start=7"):
+        guidance.fit(good, good + 1, DT, "pp", start=7)
+    with pytest.raises(ValueError, match=r"laws \['xx'\]"):
+        guidance.select(good, good + 1, DT, laws=("pp", "xx"))
 
 
 def test_the_law_command_on_a_run_and_on_a_sweep(tmp_path: Path) -> None:
@@ -155,12 +195,21 @@ def test_the_law_command_on_a_run_and_on_a_sweep(tmp_path: Path) -> None:
     assert code == 0, output
     result = json.loads((run / "law.json").read_text())
     assert set(result["kinds"]) == {"hierarchical", "always_chase", "always_stalk", "pure_pursuit"}
-    fits = result["kinds"]["hierarchical"]["predator_0"]
-    assert fits["pursuits"] == len(fits["laws"]["pp"]["gains"]["K"]) and set(fits["wins"]) == {"pp", "pn", "mixed"}
+    assert result["criterion"] == "BIC" and result["parameters"] == guidance.PARAMETERS
+    for fits in result["kinds"]["always_chase"]["predator_0"].values():
+        assert fits["attacks"] == len(fits["chosen"]) == len(fits["laws"]["pn"]["gains"]["N"])
+        assert set(fits["share"]) == set(guidance.LAWS)
     assert (run / "law.png").stat().st_size > 10_000
     code, output = run_cli("law", str(sweep), "--episodes", "3")
-    assert code == 0 and "1p-low hierarchical: best law" in output, output
+    assert code == 0 and "1p-low hierarchical: law chosen most" in output, output
     summary = json.loads((sweep / "law.json").read_text())["summary"]
-    assert set(summary["1p-low"]["hierarchical"]["laws"]) == {"pp", "pn", "mixed"}
+    assert set(summary["1p-low"]["hierarchical"]["chase"]["share"]) == set(guidance.LAWS)
+    shipped = tmp_path / "shipped"
+    code, output = run_cli("law", "--pretrained", "1p-low", "--episodes", "6", "--out", str(shipped))
+    assert code == 0 and "always_chase predator_0: chase:" in output, output
+    result = json.loads((shipped / "law.json").read_text())
+    chase = result["kinds"]["always_chase"]["predator_0"]["chase"]
+    assert chase["attacks"] > 0 and len(result["examples"]["hierarchical"]) > 0
+    assert sum(chase["share"].values()) == pytest.approx(1.0)
     code, output = run_cli("law", str(tmp_path / "nothing"))
     assert code == 2 and "no such run folder" in output

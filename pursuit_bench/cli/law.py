@@ -20,7 +20,7 @@ from pursuit_bench.cli.options import (
 )
 
 
-@click.command(short_help="Fit pursuit laws (pursuit, navigation, mixed) to the predators' pursuits.")
+@click.command(short_help="Fit pursuit laws to the predators' attacks and choose one by BIC.")
 @click.argument("folder", metavar="[RUN|SWEEP]", type=click.Path(path_type=Path), required=False)
 @pretrained_options
 @click.option("--episodes", type=click.IntRange(min=1), default=20, show_default=True, help="Episodes to play per run.")
@@ -36,10 +36,12 @@ def law(
     obstacles: int | None,
     threads: int,
 ) -> None:
-    """Fit proportional pursuit, proportional navigation and the mixed law to every predator's
-    pursuits (docs/pursuit-law.md), beside the scripted predators in their places: law.json and
-    law.png. On a SWEEP: every evaluated run (without the scripted references), summarised per
-    condition and kind over seeds."""
+    """Fit five laws (none, proportional pursuit, proportional navigation, mixed, parallel
+    navigation) to every predator's attacks (chase phases) and stalking phases, each simulated
+    from its initial conditions, and choose one per segment by BIC (docs/pursuit-law.md),
+    beside the scripted predators in their places: law.json and law.png. On a SWEEP: every
+    evaluated run (without the scripted references), summarised per condition and kind over
+    seeds."""
     where = run_or_pretrained(folder, pretrained, out)
     if pretrained is None and (where / "sweep.json").is_file():
         _law_sweep(where, episodes, seed, threads)
@@ -68,14 +70,20 @@ def law(
 
 
 def _line(fits: dict[str, Any]) -> str:
-    if not fits["pursuits"]:
-        return "no pursuit long enough to fit"
-    laws = fits["laws"]
-    wins = ", ".join(f"{law} {share:.0%}" for law, share in fits["wins"].items())
-    return (
-        f"{fits['pursuits']} pursuits; best law {fits['winner']} ({wins}); median K {laws['pp']['median']['K']:.2f}/s, "
-        f"N {laws['pn']['median']['N']:.2f}, delay {laws['pp']['median']['delay']:.1f} s"
-    )
+    parts = []
+    for phase in ("chase", "stalk"):
+        entry = fits[phase]
+        if not entry["attacks"]:
+            parts.append(f"{phase}: no segment long enough to fit")
+            continue
+        shares = ", ".join(f"{law} {share:.0%}" for law, share in entry["share"].items() if share)
+        n_gain = entry["laws"]["pn"]["summary"]["N"]
+        median = "none interior" if n_gain["median"] is None else f"median {n_gain['median']:.1f}"
+        parts.append(
+            f"{phase}: {entry['attacks']} segments, chosen {shares}; pn's N {median}, "
+            f"{n_gain['upper']:.0%} at the bound"
+        )
+    return "; ".join(parts)
 
 
 def _write(folder: Path, result: dict[str, Any], title: str) -> None:
@@ -108,7 +116,10 @@ def _law_sweep(sweep: Path, episodes: int, seed: int, threads: int) -> None:
             task_options=config.task_options,
         )
         per_run.append({**result, "run": run.name})
-        winners = ", ".join(f"{p} {fits['winner']}" for p, fits in result["kinds"][config.predator].items())
+        winners = ", ".join(
+            f"{p} {fits['chase']['winner'] or '-'}/{fits['stalk']['winner'] or '-'}"
+            for p, fits in result["kinds"][config.predator].items()
+        )
         click.echo(f"{run.name}: {winners}")
     if not per_run:
         raise BadInput(f"{sweep}: no evaluated run (runs/*/eval.json) to fit")
@@ -116,5 +127,6 @@ def _law_sweep(sweep: Path, episodes: int, seed: int, threads: int) -> None:
     atomic_write_text(sweep / "law.json", json.dumps({"summary": summary, "runs": per_run}) + "\n")
     for condition, kinds in summary.items():
         for kind, entry in kinds.items():
-            click.echo(f"{condition} {kind}: best law {entry['winner']} ({entry['predator_runs']} predator-runs)")
+            chosen = ", ".join(f"{phase} {entry[phase]['winner'] or '-'}" for phase in ("chase", "stalk"))
+            click.echo(f"{condition} {kind}: law chosen most: {chosen} ({entry['runs']} runs)")
     click.echo(f"written: law.json in {sweep}")
