@@ -27,7 +27,7 @@ import gymnasium
 import numpy as np
 
 import pursuit_bench
-from pursuit_bench.vector import VectorPursuitEnv
+from pursuit_bench.env.vector import VectorPursuitEnv
 
 CONDITION = "3p-high-shared"
 OBSTACLES = 5

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import torch
 
-from pursuit_bench import runs
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.evaluate import evaluate_agents
-from pursuit_bench.recording import Recorder
-from pursuit_bench.train import TrainConfig, Trainer
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.training import runs
+from pursuit_bench.training.evaluate import evaluate_agents
+from pursuit_bench.training.recording import Recorder
+from pursuit_bench.training.train import TrainConfig, Trainer
 
 
 def main() -> None:

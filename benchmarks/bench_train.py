@@ -29,8 +29,8 @@ import pursuit_bench  # noqa: F401  (registers the Gymnasium env)
 from pursuit_bench.agents.config import PRESET_ARENAS, QUICK, REPRODUCTION
 from pursuit_bench.agents.dqn import WALL_FEATURES, DQNLearner
 from pursuit_bench.agents.network import HEAD, TRUNK
-from pursuit_bench.task import obs_size
-from pursuit_bench.train import TrainConfig, Trainer
+from pursuit_bench.env.task import obs_size
+from pursuit_bench.training.train import TrainConfig, Trainer
 
 AGENT = QUICK.replace(learning_starts=500)
 

@@ -1,13 +1,16 @@
 """pursuit-bench: a predator–prey benchmark for multi-agent RL (Tsutsui, Takeda, Fujii 2023).
 
-``parallel_env(condition=…)`` and ``env(condition=…)`` build the PettingZoo envs;
+``parallel_env(condition=…)`` and ``aec_env(condition=…)`` build the PettingZoo envs (the
+AEC builder is not called ``env`` here: ``pursuit_bench.env`` is the environment's layer);
 ``VectorPursuitEnv`` steps B arenas at once; ``gymnasium.make("pursuit_bench/Pursuit-v0",
 agent=…, condition=…)`` is a single-agent view, and ``gymnasium.make_vec`` with the same
 arguments N of them as one Gymnasium ``VectorEnv`` over the batched core; ``load_agents(RUN)``
 returns the trained agents of a run folder by name.
 
-The envs, numba's kernels and torch are imported when first used, so that ``import
-pursuit_bench`` (and the command line's ``--help``) stays quick.
+The package's layers are folders (each ``__init__`` says what it holds and may import):
+``io`` ← ``env`` ← ``rules`` ← ``agents`` ← ``training`` ← ``study`` ← ``cli``, and
+``pretrained`` (the shipped agents). The envs, numba's kernels and torch are imported when
+first used, so that ``import pursuit_bench`` (and the command line's ``--help``) stays quick.
 """
 
 from __future__ import annotations
@@ -17,61 +20,44 @@ from typing import TYPE_CHECKING, Any
 
 import gymnasium
 
-from pursuit_bench.conditions import CONDITIONS, TaskConfig
+from pursuit_bench.env.conditions import CONDITIONS, TaskConfig
 
 if TYPE_CHECKING:
-    from pursuit_bench.pettingzoo_env import PursuitParallelEnv, env, parallel_env
-    from pursuit_bench.runs import load_agents
-    from pursuit_bench.vector import VectorPursuitEnv
+    from pursuit_bench.env.pettingzoo_env import PursuitParallelEnv, parallel_env
+    from pursuit_bench.env.pettingzoo_env import env as aec_env
+    from pursuit_bench.env.vector import VectorPursuitEnv
+    from pursuit_bench.training.runs import load_agents
 
 __all__ = [
     "CONDITIONS",
     "PursuitParallelEnv",
     "TaskConfig",
     "VectorPursuitEnv",
-    "env",
+    "aec_env",
     "load_agents",
     "parallel_env",
 ]
 __version__ = "0.1.0"
 
 _LAZY = {
-    "PursuitParallelEnv": "pursuit_bench.pettingzoo_env",
-    "env": "pursuit_bench.pettingzoo_env",
-    "parallel_env": "pursuit_bench.pettingzoo_env",
-    "VectorPursuitEnv": "pursuit_bench.vector",
-    "load_agents": "pursuit_bench.runs",
+    "PursuitParallelEnv": "pursuit_bench.env.pettingzoo_env",
+    "aec_env": "pursuit_bench.env.pettingzoo_env",
+    "parallel_env": "pursuit_bench.env.pettingzoo_env",
+    "VectorPursuitEnv": "pursuit_bench.env.vector",
+    "load_agents": "pursuit_bench.training.runs",
 }
 
 
-#: The library's modules, imported on first use as attributes (``pursuit_bench.pretrained.info``).
-_SUBMODULES = {
-    "analysis",
-    "conditions",
-    "evaluate",
-    "guidance",
-    "gym_vector",
-    "navigation",
-    "obstacles",
-    "policies",
-    "pretrained",
-    "recording",
-    "report",
-    "runs",
-    "stack",
-    "sweep",
-    "task",
-    "train",
-    "vector",
-    "world",
-}
+#: The layers and the shipped agents, imported on first use as attributes
+#: (``pursuit_bench.pretrained.info``, ``pursuit_bench.env.task``).
+_SUBPACKAGES = {"agents", "cli", "env", "io", "pretrained", "rules", "study", "training"}
 
 
 def __getattr__(name: str) -> Any:
-    if name in _SUBMODULES:
+    if name in _SUBPACKAGES:
         return importlib.import_module(f"pursuit_bench.{name}")
     if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
+        value = getattr(importlib.import_module(_LAZY[name]), "env" if name == "aec_env" else name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'pursuit_bench' has no attribute {name!r}")
@@ -80,6 +66,7 @@ def __getattr__(name: str) -> Any:
 if "pursuit_bench/Pursuit-v0" not in gymnasium.registry:
     gymnasium.register(
         id="pursuit_bench/Pursuit-v0",
-        entry_point="pursuit_bench.single:PursuitSingleAgentEnv",
-        vector_entry_point="pursuit_bench.gym_vector:PursuitVectorEnv",
+        # the views live in env/, their scripted default opponents in rules/: the factories join them
+        entry_point="pursuit_bench.rules.opponents:single_agent_env",
+        vector_entry_point="pursuit_bench.rules.opponents:vector_env",
     )

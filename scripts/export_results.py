@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from pursuit_bench import report
+from pursuit_bench.study import report
 
 
 def main() -> None:

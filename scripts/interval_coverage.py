@@ -1,5 +1,5 @@
 """How often a 95 % interval over seeds holds the true mean: the t-interval the reports use
-(``pursuit_bench.statistics.coverage``) beside the percentile bootstrap they used before, on
+(``pursuit_bench.study.statistics.coverage``) beside the percentile bootstrap they used before, on
 normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each. Prints the table
 docs/statistics.md quotes (seeded: the same table every time), then how skewed the seed-level
 differences of results/reproduction are beside the simulated data, by the same measure.
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from pursuit_bench import report, statistics
+from pursuit_bench.study import report, statistics
 
 ROOT = Path(__file__).resolve().parents[1]
 

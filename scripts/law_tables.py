@@ -12,7 +12,7 @@ import argparse
 import json
 from pathlib import Path
 
-from pursuit_bench.files import atomic_write_text
+from pursuit_bench.io.files import atomic_write_text
 
 SUMMARY = Path(__file__).resolve().parent.parent / "results" / "pursuit-law" / "sweep-summary.json"
 SHOWN = ("parallel", "pn", "mixed", "pp", "none")

@@ -19,9 +19,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from pursuit_bench import guidance
-from pursuit_bench.files import atomic_write_text
-from pursuit_bench.synthetic_attacks import TrueLaw, attack
+from pursuit_bench.io.files import atomic_write_text
+from pursuit_bench.study import guidance
+from pursuit_bench.study.synthetic_attacks import TrueLaw, attack
 
 ROOT = Path(__file__).resolve().parent.parent
 DT = 0.1

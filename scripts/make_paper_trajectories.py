@@ -14,7 +14,7 @@ import sys
 
 import numpy as np
 
-from pursuit_bench.vector import VectorPursuitEnv
+from pursuit_bench.env.vector import VectorPursuitEnv
 
 #: (condition, backend, wall rule, arenas, steps, seed)
 CASES = [

@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench import report, statistics
-from pursuit_bench.files import atomic_write_bytes
+from pursuit_bench.io.files import atomic_write_bytes
+from pursuit_bench.study import report, statistics
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "obstacles"

@@ -17,9 +17,9 @@ import json
 from pathlib import Path
 from typing import Any
 
-from pursuit_bench import robustness
-from pursuit_bench.files import atomic_write_bytes
-from pursuit_bench.plots import robust_png
+from pursuit_bench.io.files import atomic_write_bytes
+from pursuit_bench.study import robustness
+from pursuit_bench.study.plots import robust_png
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "results" / "robustness" / "robust.json.gz"

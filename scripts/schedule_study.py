@@ -27,10 +27,10 @@ from typing import Any
 import numpy as np
 import torch
 
-from pursuit_bench import statistics
 from pursuit_bench.agents.config import REPRODUCTION
-from pursuit_bench.evaluate import evaluate_agents
-from pursuit_bench.train import TrainConfig, Trainer
+from pursuit_bench.study import statistics
+from pursuit_bench.training.evaluate import evaluate_agents
+from pursuit_bench.training.train import TrainConfig, Trainer
 
 #: name -> (changes to the reproduction preset, arenas per run[, episodes]); one hypothesis per
 #: step away from the reproduction preset (replay ratio alone, then the step size with it, then
@@ -181,7 +181,7 @@ def _final_values(rows: list[dict[str, Any]], name: str, condition: str, key: st
 
 
 def _span(values: list[float]) -> str:
-    """The seeds' t-interval (pursuit_bench.statistics), as the table prints it."""
+    """The seeds' t-interval (pursuit_bench.study.statistics), as the table prints it."""
     ci = statistics.t_interval(values)
     return f" [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else ""
 

@@ -13,8 +13,9 @@ import argparse
 import json
 from pathlib import Path
 
-from pursuit_bench import pretrained, runs
-from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench import pretrained
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.training import runs
 
 
 def main() -> None:

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 import torch
 
-from pursuit_bench import task
 from pursuit_bench.agents import QUICK, DQNLearner, FlatPredator, HierarchicalPredator, Prey, ScriptedAgent
 from pursuit_bench.agents.checkpoint import load_agent, save_agent
-from pursuit_bench.evaluate import run_episodes
-from pursuit_bench.navigation import parallel_navigation
-from pursuit_bench.policies import AlwaysChase, FleeingPrey
-from pursuit_bench.train import TrainConfig, Trainer
+from pursuit_bench.env import task
+from pursuit_bench.rules.navigation import parallel_navigation
+from pursuit_bench.rules.policies import AlwaysChase, FleeingPrey
+from pursuit_bench.training.evaluate import run_episodes
+from pursuit_bench.training.train import TrainConfig, Trainer
 
 pytestmark = pytest.mark.usefixtures("one_thread")
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pursuit_bench import parallel_env
-from pursuit_bench.vector import VectorPursuitEnv
+from pursuit_bench.env.vector import VectorPursuitEnv
 
 
 def lockstep(wall_rule: str, steps: int, num_envs: int = 64, condition: str = "3p-low-individual"):

@@ -7,8 +7,8 @@ from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test
 
 import pursuit_bench
-from pursuit_bench import task
-from pursuit_bench.pettingzoo_env import as_continuous
+from pursuit_bench.env import task
+from pursuit_bench.env.pettingzoo_env import as_continuous
 
 
 def test_discrete_actions_and_their_continuous_equivalents_give_identical_episodes() -> None:
@@ -70,7 +70,7 @@ def test_the_batched_views_take_continuous_actions() -> None:
 
 
 def test_a_continuous_episode_is_recorded(tmp_path) -> None:
-    from pursuit_bench.recording import RecordEpisodes
+    from pursuit_bench.training.recording import RecordEpisodes
 
     env = RecordEpisodes(pursuit_bench.parallel_env("1p-high", continuous=True), tmp_path / "c.rrd")
     env.reset(seed=0)

@@ -1,6 +1,8 @@
 """The env through the ecosystem's own checkers, plus determinism and bad input."""
 
 import hashlib
+import importlib
+import re
 import subprocess
 import sys
 import warnings
@@ -14,7 +16,7 @@ from pettingzoo.test import api_test, parallel_api_test, seed_test
 
 import pursuit_bench
 from pursuit_bench import CONDITIONS
-from pursuit_bench.policies import AlwaysStalk, FleeingPrey
+from pursuit_bench.rules.policies import AlwaysStalk, FleeingPrey
 
 
 def test_ten_conditions_by_name() -> None:
@@ -32,8 +34,8 @@ def test_pettingzoo_api_tests(condition: str) -> None:
         # the spec (docs/spec.md) fixes the predators' action space as MultiDiscrete([2, 12]), which api_test flags
         warnings.filterwarnings("ignore", message="Action space for each agent probably should be")
         parallel_api_test(pursuit_bench.parallel_env(condition), num_cycles=400)
-        api_test(pursuit_bench.env(condition), num_cycles=400)
-        seed_test(lambda: pursuit_bench.env(condition), num_cycles=200)
+        api_test(pursuit_bench.aec_env(condition), num_cycles=400)
+        seed_test(lambda: pursuit_bench.aec_env(condition), num_cycles=200)
 
 
 def rollout_digest(condition: str, seed: int, steps: int) -> str:
@@ -184,12 +186,26 @@ def test_single_agent_view_uses_given_opponents() -> None:
         gymnasium.make("pursuit_bench/Pursuit-v0", agent="prey_0", opponents={"prey_0": FleeingPrey()})
 
 
-def test_every_module_the_readme_names_is_an_attribute_of_the_package() -> None:
+def test_every_name_the_readme_gives_in_the_package_exists() -> None:
+    """Each dotted ``pursuit_bench.…`` name in the README imports (a module) or is an attribute
+    of the module before it; and the package's lazy attributes work in a fresh interpreter."""
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    names = sorted(set(re.findall(r"pursuit_bench(?:\.[A-Za-z_][A-Za-z_0-9]*)+", readme)))
+    assert "pursuit_bench.training.evaluate.evaluate_agents" in names
+    for name in names:
+        parts = name.split(".")
+        for cut in range(len(parts), 0, -1):
+            try:
+                found: object = importlib.import_module(".".join(parts[:cut]))
+            except ModuleNotFoundError:
+                continue
+            for attribute in parts[cut:]:
+                found = getattr(found, attribute)
+            break
     code = (
         "import pursuit_bench as p; "
         "assert 'seed' in next(iter(p.pretrained.info('1p-high').values())); "
-        "assert callable(p.navigation.parallel_navigation) and callable(p.evaluate.evaluate_agents); "
-        "assert p.policies.FleeingPrey"
+        "assert callable(p.parallel_env) and callable(p.aec_env) and p.VectorPursuitEnv and p.env.__file__"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr

@@ -7,7 +7,8 @@ import pytest
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 
 import pursuit_bench  # noqa: F401  (registers the env)
-from pursuit_bench.gym_vector import PursuitVectorEnv
+from pursuit_bench.env.gym_vector import PursuitVectorEnv
+from pursuit_bench.rules.opponents import vector_env
 
 
 @pytest.mark.parametrize(
@@ -57,7 +58,9 @@ def test_bad_arguments_are_clear_errors() -> None:
         PursuitVectorEnv(2, agent="wolf")
     with pytest.raises(ValueError, match="num_envs=0"):
         PursuitVectorEnv(0)
-    env = PursuitVectorEnv(2, agent="prey_0")
+    with pytest.raises(ValueError, match=r"no policy for \['predator_0'\]"):
+        PursuitVectorEnv(2, agent="prey_0")  # env/ knows no scripted agents: they are given
+    env = vector_env(2, agent="prey_0")
     env.reset(seed=0)
     with pytest.raises(ValueError, match="expected integers with 2 rows"):
         env.step(np.zeros(3, dtype=int))

@@ -3,10 +3,15 @@
 import numpy as np
 import pytest
 
-from pursuit_bench import task
-from pursuit_bench.navigation import APPROACH_DIRECTIONS, constant_bearing_angle, parallel_navigation, pure_pursuit
-from pursuit_bench.policies import PurePursuitPredator
-from pursuit_bench.world import DAMPING, DT, make_world
+from pursuit_bench.env import task
+from pursuit_bench.env.world import DAMPING, DT, make_world
+from pursuit_bench.rules.navigation import (
+    APPROACH_DIRECTIONS,
+    constant_bearing_angle,
+    parallel_navigation,
+    pure_pursuit,
+)
+from pursuit_bench.rules.policies import PurePursuitPredator
 
 CASES = [  # predator start, prey start, prey velocity
     ((-0.5, -0.5), (0.3, 0.0), (0.0, 0.5)),

@@ -17,17 +17,17 @@ from pettingzoo.test import parallel_api_test, parallel_seed_test
 from test_recording import read_back
 
 import pursuit_bench
-from pursuit_bench import task
 from pursuit_bench.agents.kinds import ScriptedAgent
-from pursuit_bench.conditions import OBSTACLE_GAP, TaskConfig, resolve_condition
-from pursuit_bench.core import PursuitCore
-from pursuit_bench.evaluate import run_episodes
-from pursuit_bench.navigation import SAFETY_DISTANCE, avoid, navigate, parallel_navigation
-from pursuit_bench.obstacles import RANGE_CAP, START_GAP
-from pursuit_bench.policies import AlwaysChase, FleeingPrey
-from pursuit_bench.recording import Recorder
-from pursuit_bench.vector import VectorPursuitEnv
-from pursuit_bench.world import CONTACT_TOLERANCE, HALF_SIZE, RADIUS
+from pursuit_bench.env import task
+from pursuit_bench.env.conditions import OBSTACLE_GAP, TaskConfig, resolve_condition
+from pursuit_bench.env.core import PursuitCore
+from pursuit_bench.env.obstacles import RANGE_CAP, START_GAP
+from pursuit_bench.env.vector import VectorPursuitEnv
+from pursuit_bench.env.world import CONTACT_TOLERANCE, HALF_SIZE, RADIUS
+from pursuit_bench.rules.navigation import SAFETY_DISTANCE, avoid, navigate, parallel_navigation
+from pursuit_bench.rules.policies import AlwaysChase, FleeingPrey
+from pursuit_bench.training.evaluate import run_episodes
+from pursuit_bench.training.recording import Recorder
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
 import make_paper_trajectories

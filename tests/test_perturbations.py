@@ -1,4 +1,4 @@
-"""Perturbed worlds and senses (pursuit_bench/perturbations.py), held-out opponents and the
+"""Perturbed worlds and senses (pursuit_bench/env/perturbations.py), held-out opponents and the
 robust command: neutral values change nothing, positive ones change what they should."""
 
 import json
@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 from cli_helpers import cli_command, run_cli
 
-from pursuit_bench import robustness, task
 from pursuit_bench.agents.kinds import ScriptedAgent
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.evaluate import evaluate_agents
-from pursuit_bench.perturbations import Perturbations, PerturbedEnv
-from pursuit_bench.policies import AlwaysChase, AlwaysStalk, FleeingPrey
-from pursuit_bench.vector import VectorPursuitEnv
-from pursuit_bench.world import DAMPING, DT
+from pursuit_bench.env import task
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.env.perturbations import Perturbations, PerturbedEnv
+from pursuit_bench.env.vector import VectorPursuitEnv
+from pursuit_bench.env.world import DAMPING, DT
+from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
+from pursuit_bench.study import robustness
+from pursuit_bench.training.evaluate import evaluate_agents
 
 
 def scripted(condition: str) -> dict:
@@ -196,7 +197,7 @@ def test_held_out_opponents_play_the_other_runs_prey(tmp_path: Path) -> None:
     )
     assert code == 0, output
     result = json.loads((tmp_path / "r0" / "eval-vs-r1.json").read_text())
-    from pursuit_bench import runs
+    from pursuit_bench.training import runs
 
     _, mine, _ = runs.described(tmp_path / "r0")
     _, theirs, _ = runs.described(tmp_path / "r1")

@@ -9,7 +9,8 @@ import pytest
 import torch
 from cli_helpers import run_cli
 
-from pursuit_bench import pretrained, runs
+from pursuit_bench import pretrained
+from pursuit_bench.training import runs
 
 TINY = ["--num-envs", "4", "--learning-starts", "32", "--batch-size", "16", "--checkpoint-every", "5"]
 

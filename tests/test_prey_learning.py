@@ -3,7 +3,7 @@
 import numpy as np
 
 from pursuit_bench.agents.config import QUICK
-from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
+from pursuit_bench.training.train import EpisodeRecord, TrainConfig, Trainer
 
 #: The rise of the prey's mean return from its first 100 episodes to its last 100 of 500. Seed 0
 #: of this setting measured −1.01 then −0.56 (docs/learning.md, hypothesis 1: learning rate 3e-5).

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 import pursuit_bench
 from pursuit_bench import CONDITIONS
-from pursuit_bench.world import HALF_SIZE, RADIUS
+from pursuit_bench.env.world import HALF_SIZE, RADIUS
 
 
 @settings(max_examples=60, deadline=None)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pursuit_bench import report
+from pursuit_bench.study import report
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "reproduction"

@@ -14,9 +14,9 @@ import rerun.chunk as rc
 from cli_helpers import cli_command, lines, run_cli, wait_for, wait_until
 
 import pursuit_bench
-from pursuit_bench import runs
-from pursuit_bench.evaluate import evaluate_agents
-from pursuit_bench.recording import TRAIL_ROWS_PER_CHUNK, EpisodeTrace, Recorder
+from pursuit_bench.training import runs
+from pursuit_bench.training.evaluate import evaluate_agents
+from pursuit_bench.training.recording import TRAIL_ROWS_PER_CHUNK, EpisodeTrace, Recorder
 
 TINY = ["--num-envs", "4", "--learning-starts", "32", "--batch-size", "16", "--checkpoint-every", "5"]
 
@@ -46,7 +46,7 @@ def test_a_failure_before_the_first_checkpoint_leaves_no_folder(tmp_path: Path, 
     def broken(*args, **kwargs):
         raise RuntimeError("the arenas could not be built")
 
-    monkeypatch.setattr("pursuit_bench.train.Trainer.__init__", broken)
+    monkeypatch.setattr("pursuit_bench.training.train.Trainer.__init__", broken)
     out = tmp_path / "run"
     code, _ = run_cli("train", "--condition", "1p-low", "--out", str(out), *TINY)
     assert code == 1 and not out.exists()

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pursuit_bench
 from pursuit_bench import pretrained
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.evaluate import evaluate_agents
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.training.evaluate import evaluate_agents
 
 
 def test_every_condition_is_shipped_small_and_acts() -> None:

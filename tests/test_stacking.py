@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from pursuit_bench.agents.config import QUICK
-from pursuit_bench.train import EpisodeRecord, TrainConfig, Trainer
+from pursuit_bench.training.train import EpisodeRecord, TrainConfig, Trainer
 
 AGENT = QUICK.replace(learning_starts=64, batch_size=16, target_update_every=100)
 

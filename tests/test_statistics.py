@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from pursuit_bench import report, statistics
+from pursuit_bench.study import report, statistics
 
 
 def test_the_paired_difference_and_its_t_interval_by_hand() -> None:

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 from cli_helpers import lines, run_cli, wait_until
 
-from pursuit_bench import runs
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.sweep import SweepPlan, expected_cost, stacks
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.training import runs
+from pursuit_bench.training.sweep import SweepPlan, expected_cost, stacks
 
 SWEEP = ["sweep", "--conditions", "1p-high,2p-high-shared", "--seeds", "2", "--episodes", "40"]
 SWEEP += ["--eval-episodes", "50", "--workers", "2", "--checkpoint-every", "10"]

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from pursuit_bench import task
-from pursuit_bench.conditions import TaskConfig
-from pursuit_bench.world import Contacts
+from pursuit_bench.env import task
+from pursuit_bench.env.conditions import TaskConfig
+from pursuit_bench.env.world import Contacts
 
 
 def naive_observation(p: np.ndarray, v: np.ndarray, i: int) -> list[float]:

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from pursuit_bench.task import ACCEL_CHASE, ACCEL_PREY, ACCEL_STALK
-from pursuit_bench.world import DAMPING, DT, RADIUS, make_world
+from pursuit_bench.env.task import ACCEL_CHASE, ACCEL_PREY, ACCEL_STALK
+from pursuit_bench.env.world import DAMPING, DT, RADIUS, make_world
 
 BACKENDS = ["pymunk", "numpy"]
 

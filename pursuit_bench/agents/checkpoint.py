@@ -16,7 +16,7 @@ from typing import Any
 import torch
 
 from pursuit_bench.agents.kinds import LearningAgent
-from pursuit_bench.files import atomic_write_bytes
+from pursuit_bench.io.files import atomic_write_bytes
 
 FORMAT = "pursuit-bench-checkpoint-1"
 

@@ -22,9 +22,9 @@ import numpy as np
 import torch
 
 from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.navigation import navigate
-from pursuit_bench.policies import Policy
-from pursuit_bench.task import N_DIRECTIONS
+from pursuit_bench.env.task import N_DIRECTIONS
+from pursuit_bench.rules.navigation import navigate
+from pursuit_bench.rules.policies import Policy
 
 
 class LearningAgent:
@@ -80,7 +80,7 @@ class LearningAgent:
 class HierarchicalPredator(LearningAgent):
     """Deep RL picks how hard (stalk 0 / chase 1); parallel navigation picks where. With
     ``avoidance`` (a task with obstacles: the observations end with range readings) the lower
-    layer steers around what they show (:func:`pursuit_bench.navigation.navigate`)."""
+    layer steers around what they show (:func:`pursuit_bench.rules.navigation.navigate`)."""
 
     kind = "hierarchical"
     n_actions = 2

@@ -1,1 +1,1 @@
-"""The command line: ``pursuit-bench``."""
+"""The command line: ``pursuit-bench``. The top layer: it may import every other one."""

@@ -1,5 +1,6 @@
 """``pursuit-bench eval``: a trained RUN, or the shipped agents of a condition, evaluated by the
-paper's protocol (:func:`~pursuit_bench.stack.evaluate_folder`, :func:`~pursuit_bench.stack.evaluate_into`).
+paper's protocol (:func:`~pursuit_bench.training.stack.evaluate_folder`,
+:func:`~pursuit_bench.training.stack.evaluate_into`).
 """
 
 from __future__ import annotations
@@ -11,7 +12,6 @@ from typing import Any
 
 import click
 
-from pursuit_bench import runs
 from pursuit_bench.cli.options import (
     BadInput,
     obstacles_option,
@@ -20,7 +20,8 @@ from pursuit_bench.cli.options import (
     threads_option,
     trained_agents,
 )
-from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
+from pursuit_bench.io.signals import STOP_SIGNALS, SignalCatcher, Stopped
+from pursuit_bench.training import runs
 
 
 @click.command(name="eval", short_help="Evaluate a run or the shipped agents by the paper's protocol.")
@@ -50,7 +51,7 @@ from pursuit_bench.signals import STOP_SIGNALS, SignalCatcher, Stopped
     multiple=True,
     metavar="NAME=MODULE:FACTORY",
     help="Replace agent NAME (predator_0, …, prey_0) by the object MODULE:FACTORY() returns, with act(observation) "
-    "(pursuit_bench/external.py), and evaluate it like a trained one. Repeatable.",
+    "(pursuit_bench/agents/external.py), and evaluate it like a trained one. Repeatable.",
 )
 @click.option(
     "--perturb",
@@ -88,7 +89,7 @@ def evaluate(
 
     The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
     the previous ones as they were (exit 130 or 143)."""
-    from pursuit_bench.perturbations import Perturbations
+    from pursuit_bench.env.perturbations import Perturbations
 
     folder = run_or_pretrained(run, pretrained, out)
     specs = _agent_specs(agents)
@@ -121,9 +122,9 @@ def _held_out(
     FleeingPrey), and ``about`` with the other side's result: OTHER's predators against the
     run's prey by the same protocol (its ``prey_check`` scores the run's prey)."""
     from pursuit_bench.agents.kinds import ScriptedAgent
-    from pursuit_bench.evaluate import evaluate_agents
-    from pursuit_bench.policies import FleeingPrey
-    from pursuit_bench.robustness import check_opponents
+    from pursuit_bench.rules.policies import FleeingPrey
+    from pursuit_bench.study.robustness import check_opponents
+    from pursuit_bench.training.evaluate import evaluate_agents
 
     prey = agents["prey_0"]
     if opponents == "scripted":
@@ -176,8 +177,9 @@ def _evaluate_run(
     the files are put in place), whatever library call it lands in: before that point the
     previous files stay and the exit status is 130 or 143; after it the new files are complete
     and the status is 0."""
-    from pursuit_bench import external
-    from pursuit_bench.stack import evaluate_into
+    from pursuit_bench.agents import external
+    from pursuit_bench.study.plots import reward_bars_png
+    from pursuit_bench.training.stack import evaluate_into
 
     kind = None
     if specs:
@@ -188,7 +190,14 @@ def _evaluate_run(
     try:
         with SignalCatcher(raise_at_once=False).active() as signals:
             result = evaluate_into(
-                paths, config, agents, {**about, "tag": tag}, check=signals.check, predator_kind=kind, **settings
+                paths,
+                config,
+                agents,
+                {**about, "tag": tag},
+                check=signals.check,
+                predator_kind=kind,
+                figure=reward_bars_png,
+                **settings,
             )
             for stop_signal in STOP_SIGNALS:  # the files are complete: a later signal changes nothing
                 signal.signal(stop_signal, signal.SIG_IGN)

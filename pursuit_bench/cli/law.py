@@ -1,4 +1,4 @@
-"""``pursuit-bench law``: which pursuit law the predators follow (:mod:`pursuit_bench.pursuit_laws`),
+"""``pursuit-bench law``: which pursuit law the predators follow (:mod:`pursuit_bench.study.pursuit_laws`),
 for a run, the shipped agents or every run of a sweep.
 """
 
@@ -48,7 +48,7 @@ def law(
         return
     try:
         with trained_agents(where, pretrained, threads, obstacles) as (config, agents, _):
-            from pursuit_bench import pursuit_laws
+            from pursuit_bench.study import pursuit_laws
 
             name = where.name if pretrained is None else f"shipped agents of {pretrained}"
             result = pursuit_laws.analyse(
@@ -87,8 +87,8 @@ def _line(fits: dict[str, Any]) -> str:
 
 
 def _write(folder: Path, result: dict[str, Any], title: str) -> None:
-    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.plots import law_png
+    from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.study.plots import law_png
 
     atomic_write_bytes(folder / "law.png", law_png(result, title))
     atomic_write_text(folder / "law.json", json.dumps(result) + "\n")
@@ -97,8 +97,9 @@ def _write(folder: Path, result: dict[str, Any], title: str) -> None:
 def _law_sweep(sweep: Path, episodes: int, seed: int, threads: int) -> None:
     import torch
 
-    from pursuit_bench import pursuit_laws, runs
-    from pursuit_bench.files import atomic_write_text
+    from pursuit_bench.io.files import atomic_write_text
+    from pursuit_bench.study import pursuit_laws
+    from pursuit_bench.training import runs
 
     torch.set_num_threads(threads)
     per_run = []

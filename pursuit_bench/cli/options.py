@@ -19,7 +19,7 @@ from typing import Any
 import click
 
 from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS, AgentConfig
-from pursuit_bench.conditions import CONDITIONS, MAX_OBSTACLES, OBSTACLE_RADII, OBSTACLE_RADIUS
+from pursuit_bench.env.conditions import CONDITIONS, MAX_OBSTACLES, OBSTACLE_RADII, OBSTACLE_RADIUS
 
 PREDATOR_KINDS = ("hierarchical", "flat", "always_chase", "always_stalk")
 #: Training budgets above this (100 times the paper's 1e6 episodes) are surely a typing error.
@@ -247,7 +247,7 @@ def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
     """Hold ``folder``'s lock: a RUN (checked to be one before a lock file is made in it), or the
     results folder of --pretrained (made if missing, and removed again, lock and all, if what ran
     in it failed). Imports nothing heavy: a refusal is quick."""
-    from pursuit_bench.files import locked as lock
+    from pursuit_bench.io.files import locked as lock
 
     made = False
     if pretrained is None:
@@ -281,7 +281,7 @@ def trained_agents(
         import torch
 
         from pursuit_bench import pretrained as shipped
-        from pursuit_bench import runs
+        from pursuit_bench.training import runs
 
         torch.set_num_threads(threads)
         config, agents, about = runs.described(folder) if pretrained is None else shipped.described(pretrained)

@@ -1,5 +1,5 @@
 """``pursuit-bench report``: the claim judged panel by panel over a sweep's seeds (verdicts, paired
-differences, per-seed counts, power, convergence: :func:`pursuit_bench.report.write`), or the
+differences, per-seed counts, power, convergence: :func:`pursuit_bench.study.report.write`), or the
 learning curves and a summary of one run.
 """
 
@@ -21,7 +21,7 @@ def report(where: Path, out: Path | None) -> None:
     `scripts/export_results.py` writes): report.md and report.json (the
     panels' verdicts, paired differences, per-seed counts, power), fig2.png, forest.png,
     counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary."""
-    from pursuit_bench import report as reports
+    from pursuit_bench.study import report as reports
 
     if out is not None and out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
@@ -48,9 +48,9 @@ def report(where: Path, out: Path | None) -> None:
 
 def _report_run(folder: Path, out: Path) -> None:
     """One run: what was trained, how far, its last episodes and its evaluation, and curves.png."""
-    from pursuit_bench import report as reports
-    from pursuit_bench.files import atomic_write_bytes
-    from pursuit_bench.plots import curves_png
+    from pursuit_bench.io.files import atomic_write_bytes
+    from pursuit_bench.study import report as reports
+    from pursuit_bench.study.plots import curves_png
 
     config = json.loads((folder / "config.json").read_text())["train"]
     metrics = folder / "metrics.jsonl"

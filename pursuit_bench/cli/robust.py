@@ -1,5 +1,5 @@
 """``pursuit-bench robust``: the predators' margin over the baselines under a ladder of
-perturbations, and cross-play over a sweep's seeds (:mod:`pursuit_bench.robustness`).
+perturbations, and cross-play over a sweep's seeds (:mod:`pursuit_bench.study.robustness`).
 """
 
 from __future__ import annotations
@@ -54,9 +54,9 @@ def robust(
         where = out or folders[0]
         sources = [s for folder in folders for s in _sources(folder, None, conditions, seeds)]
     where.mkdir(parents=True, exist_ok=True)
-    from pursuit_bench import robustness
-    from pursuit_bench.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.plots import robust_png
+    from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.study import robustness
+    from pursuit_bench.study.plots import robust_png
 
     def progress(done: int, total: int) -> None:
         click.echo(f"robust: {done} of {total} evaluations", err=True)
@@ -76,7 +76,7 @@ def robust(
 
 def _sources(where: Path, pretrained: str | None, conditions: str | None, seeds: int | None) -> list[dict[str, Any]]:
     """What to evaluate: the shipped agents, one run, or every evaluated run of a sweep."""
-    from pursuit_bench import runs
+    from pursuit_bench.training import runs
 
     if pretrained is not None:
         from pursuit_bench import pretrained as shipped

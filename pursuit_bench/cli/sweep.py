@@ -1,5 +1,5 @@
-"""``pursuit-bench sweep``: options into a :class:`~pursuit_bench.sweep.SweepPlan`, then
-:func:`~pursuit_bench.sweep.run_sweep` with progress (an ETA by expected transitions).
+"""``pursuit-bench sweep``: options into a :class:`~pursuit_bench.training.sweep.SweepPlan`, then
+:func:`~pursuit_bench.training.sweep.run_sweep` with progress (an ETA by expected transitions).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from pursuit_bench.cli.options import (
     training_options,
 )
 from pursuit_bench.cli.progress import Progress
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.signals import SignalCatcher, Stopped
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.io.signals import SignalCatcher, Stopped
 
 
 @click.command(short_help="Train and evaluate conditions × seeds × predator kinds.")
@@ -112,7 +112,8 @@ def sweep(
     kinds = names(predators, PREDATOR_KINDS, "predators")
     kept = episode_counts(keep_checkpoints)
 
-    from pursuit_bench import sweep as sweeps
+    from pursuit_bench.study.plots import reward_bars_png
+    from pursuit_bench.training import sweep as sweeps
 
     overrides = {k: v for k, v in hyperparameters.items() if v is not None}
     try:
@@ -180,6 +181,7 @@ def sweep(
                 address=address,
                 on_message=on_message,
                 should_stop=lambda: signals.signum is not None,
+                figure=reward_bars_png,
             )
         except ValueError as error:  # e.g. --backend ray without Ray
             raise BadInput(str(error)) from None

@@ -1,5 +1,5 @@
-"""``pursuit-bench train``: options into a :class:`~pursuit_bench.train.TrainConfig`, the run
-folder made ready (new, resumed or replaced), then :func:`~pursuit_bench.stack.train_stack` with
+"""``pursuit-bench train``: options into a :class:`~pursuit_bench.training.train.TrainConfig`, the run
+folder made ready (new, resumed or replaced), then :func:`~pursuit_bench.training.stack.train_stack` with
 progress on the terminal or in the log.
 """
 
@@ -25,12 +25,12 @@ from pursuit_bench.cli.options import (
     training_options,
 )
 from pursuit_bench.cli.progress import Progress
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.signals import SignalCatcher, Stopped
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.io.signals import SignalCatcher, Stopped
 
 if TYPE_CHECKING:
-    from pursuit_bench.train import EpisodeRecord
-    from pursuit_bench.train_config import TrainConfig
+    from pursuit_bench.training.train import EpisodeRecord
+    from pursuit_bench.training.train_config import TrainConfig
 
 #: Options that only say how this process runs: free to differ when a run is resumed.
 RUNTIME_OPTIONS = {"out", "resume", "force", "no_record", "threads", "log_every", "episodes"}
@@ -52,7 +52,7 @@ def _resumed_config(
 ) -> tuple[TrainConfig, dict[str, Any], str | None]:
     """The configuration saved in ``out`` with the options given beside ``--resume`` checked
     against it; ``--episodes`` moves the target. Returns (config, settings, what changed)."""
-    from pursuit_bench import runs
+    from pursuit_bench.training import runs
 
     try:
         saved, settings = runs.read_config(out)
@@ -79,7 +79,7 @@ def _resumed_config(
 
 def _prepare_folder(out: Path, config: TrainConfig, settings: dict[str, Any], resume: bool, force: bool) -> dict | None:
     """Make ``out`` hold this run (its lock held); returns the checkpoint to resume from, or None."""
-    from pursuit_bench import runs
+    from pursuit_bench.training import runs
 
     if resume:
         state = None
@@ -192,8 +192,8 @@ def train(
     """Train every agent of a condition together (independent learners) into a run folder.
 
     Ctrl-C or SIGTERM saves a checkpoint and stops (exit 130 or 143); `--resume` continues."""
-    from pursuit_bench import runs  # no torch yet: refusals come at once
-    from pursuit_bench.train_config import TrainConfig
+    from pursuit_bench.training import runs  # no torch yet: refusals come at once
+    from pursuit_bench.training.train_config import TrainConfig
 
     every = recording_every(no_record, record_every)
     if resume and force:
@@ -262,7 +262,7 @@ def _train_run(
     log_every: int,
 ) -> None:
     """Train (the folder ready and locked) until done or a signal, showing progress."""
-    from pursuit_bench.stack import FolderRun, train_stack
+    from pursuit_bench.training.stack import FolderRun, train_stack
 
     run = FolderRun(out, config, settings, state)
     if run.episodes_done >= config.episodes:

@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from pursuit_bench.cli.options import BadInput
-from pursuit_bench.conditions import CONDITIONS
+from pursuit_bench.env.conditions import CONDITIONS
 
 
 @click.command()
@@ -33,7 +33,7 @@ RRD_MAGIC = b"RRF2"
 def view(path: Path) -> None:
     """Open a recording (.rrd), or every recording of a run folder, in the Rerun viewer."""
     if path.is_dir():
-        from pursuit_bench import runs
+        from pursuit_bench.training import runs
 
         files = runs.recordings(path)
         if not files:

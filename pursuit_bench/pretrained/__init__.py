@@ -22,10 +22,10 @@ from safetensors import SafetensorError, safe_open
 from safetensors.torch import save
 
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
-from pursuit_bench.conditions import CONDITIONS
-from pursuit_bench.files import atomic_write_bytes
-from pursuit_bench.task import obs_size
-from pursuit_bench.train import TrainConfig, build_agents
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.env.task import obs_size
+from pursuit_bench.io.files import atomic_write_bytes
+from pursuit_bench.training.train import TrainConfig, build_agents
 
 FOLDER = Path(__file__).parent
 """Where the shipped agents lie (package data)."""
@@ -91,7 +91,7 @@ def _typed(value: str) -> Any:
 
 def load(condition: str, *, folder: Path | None = None) -> dict[str, LearningAgent | ScriptedAgent]:
     """The shipped agents of ``condition`` by name (``predator_0`` …, ``prey_0``), ready for
-    ``act(observation)`` (greedy) and :func:`~pursuit_bench.evaluate.evaluate_agents`.
+    ``act(observation)`` (greedy) and :func:`~pursuit_bench.training.evaluate.evaluate_agents`.
     ``folder``: read from there instead of the package (for agents you exported yourself)."""
     where = _condition_folder(condition, folder)
     files = {path.name.removesuffix(SUFFIX): (path, *read(path)) for path in sorted(where.glob(f"*{SUFFIX}"))}

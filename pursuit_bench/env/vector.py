@@ -1,0 +1,143 @@
+"""Many arenas stepped at once: the same core as the single env, with stacked arrays.
+
+Autoreset is *same-step*: when an arena's episode ends on a step, that step's rewards,
+``terminated`` and ``truncated`` belong to the ended episode, the returned observation is
+already the first of the arena's next episode, and the ended episode's last observation is in
+``info["final_observation"]`` (valid where ``info["done"]``). A learner bootstraps from it, unless
+the arena terminated. Each arena draws its start states from its own generator, spawned from
+the seed given to ``reset``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector.utils import batch_space
+
+from pursuit_bench.env import task
+from pursuit_bench.env.agent_spaces import agent_spaces
+from pursuit_bench.env.conditions import TaskConfig, resolve_condition
+from pursuit_bench.env.core import PursuitCore
+from pursuit_bench.env.world import Backend
+
+
+def put_actions(actions: np.ndarray, agent: int, env_actions: np.ndarray) -> None:
+    """Write one agent's env actions, (B, 2) ``(mode, direction)`` or (B,) directions, into a
+    batch of actions (B, n_agents, 2)."""
+    if env_actions.ndim == 2:
+        actions[:, agent] = env_actions
+    else:
+        actions[:, agent, 1] = env_actions
+
+
+class VectorPursuitEnv:
+    """``num_envs`` arenas of one condition, stepped together.
+
+    Args:
+        num_envs: number of arenas B.
+        condition: one of :data:`pursuit_bench.CONDITIONS`, or None to give the options.
+        backend: ``"pymunk"`` (the reference, default) or ``"numpy"``.
+        **options: ``n_predators``, ``chase_cost``, ``reward_sharing``, ``max_steps``, ``wall_rule``,
+            ``continuous``, ``obstacles``, ``obstacle_radius``.
+
+    ``step(actions)`` takes integers of shape (B, n_agents, 2): ``(mode, direction)`` per agent
+    (the prey's mode is ignored), or with ``continuous=True`` floats of that shape (each agent's
+    acceleration in its line-of-sight frame), and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
+    (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
+    with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
+    float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
+    (B, n_predators), ``left_area`` (B, n_agents), ``touching_obstacle`` (B, n_agents),
+    ``episode_return`` (B, n_agents) and ``episode_length`` (B,) of the episodes that ended.
+    With obstacles (``obstacles=K``) observations end with 12 range readings and
+    ``obstacles`` is every arena's, (B, K, 3) rows of x, y, radius.
+
+    Spaces: ``single_observation_spaces`` and ``single_action_spaces`` by agent name (those of
+    the PettingZoo env), ``observation_spaces`` and ``action_spaces`` the same batched over the
+    B arenas (Gymnasium's ``batch_space``); ``observation_space`` is the whole (B, n_agents,
+    6n-2) array ``step`` returns.
+
+    The contract beside the ecosystem's: like VMAS, every array is stacked with the arena axis
+    first and every arena steps on every call; unlike VMAS (a list per agent) and PettingZoo
+    (dicts by agent name), agents are a second axis, in ``agents`` order; unlike PettingZoo, no
+    agent leaves an arena mid-episode: an episode ends for all of its agents at once, and that
+    arena resets on the same step (above).
+    """
+
+    def __init__(self, num_envs: int, condition: str | None = None, *, backend: Backend = "pymunk", **options: Any):
+        self.config: TaskConfig = resolve_condition(condition, **options)
+        self.condition = condition
+        self.num_envs = num_envs
+        self.core = PursuitCore(self.config, num_envs, backend=backend)
+        self.agents = list(self.config.agent_names)
+        self.n_agents = self.config.n_agents
+        self.obs_size = task.obs_size(self.n_agents, self.config.obstacles > 0)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (num_envs, self.n_agents, self.obs_size), np.float32)
+        self.single_observation_spaces, self.single_action_spaces = agent_spaces(self.config)
+        self.observation_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_observation_spaces.items()}
+        self.action_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_action_spaces.items()}
+        self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence().spawn(num_envs)]
+        self._returns = np.zeros((num_envs, self.n_agents))
+
+    @property
+    def obstacles(self) -> np.ndarray:
+        """(B, K, 3) every arena's obstacles in its current episode (x, y, radius)."""
+        return self.core.world.obstacles.copy()
+
+    def reset(self, seed: int | Sequence[int] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start every arena afresh. ``seed``: one integer, from which every arena's generator is
+        spawned; or one integer per arena, arena i then drawing exactly what a single env reset
+        with ``seed[i]`` draws (Gymnasium's ``SyncVectorEnv`` seeds its env i with ``seed + i``)."""
+        if isinstance(seed, (list, tuple, np.ndarray)):
+            if len(seed) != self.num_envs:
+                raise ValueError(f"seed: expected one per arena ({self.num_envs}), got {len(seed)}")
+            self._rngs = [np.random.default_rng(int(s)) for s in seed]
+        elif seed is not None:
+            self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(self.num_envs)]
+        obs = self.core.reset(np.arange(self.num_envs), self._rngs)
+        self._returns[:] = 0.0
+        return obs, {}
+
+    def _check(self, actions: np.ndarray) -> np.ndarray:
+        arr = np.asarray(actions)
+        expected = (self.num_envs, self.n_agents, 2)
+        if arr.shape != expected or arr.dtype.kind not in "iu":
+            raise ValueError(f"actions: expected integers of shape {expected}, got {arr.dtype} {arr.shape}")
+        modes, directions = arr[:, :-1, 0], arr[..., 1]
+        if ((modes < 0) | (modes > 1)).any() or ((directions < 0) | (directions >= task.N_DIRECTIONS)).any():
+            raise ValueError("actions: modes must be 0 (stalk) or 1 (chase) and directions in 0..11")
+        return arr
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if self.config.continuous:
+            vectors = np.asarray(actions, dtype=np.float64)
+            if vectors.shape != (self.num_envs, self.n_agents, 2) or not np.isfinite(vectors).all():
+                raise ValueError(f"actions: expected finite floats of shape {(self.num_envs, self.n_agents, 2)}")
+            result = self.core.step_continuous(vectors)
+        else:
+            arr = self._check(actions)
+            result = self.core.step(arr[:, :-1, 0], arr[..., 1])
+        self._returns += result.rewards
+        done = result.terminated | result.truncated
+        info: dict[str, Any] = {
+            "done": done,
+            "final_observation": result.observations,
+            "positions": self.core.world.positions.copy(),
+            "captured": result.captured,
+            "touching_prey": result.contacts.prey,
+            "left_area": result.contacts.wall,
+            "touching_obstacle": result.contacts.obstacle,
+            "episode_return": self._returns.copy(),
+            "episode_length": self.core.steps.copy(),
+        }
+        obs = result.observations
+        if done.any():
+            ended = np.flatnonzero(done)
+            obs = obs.copy()  # the ended episodes' last observations stay in the info
+            obs[ended] = self.core.reset(ended, [self._rngs[i] for i in ended])
+            self._returns[ended] = 0.0
+        terminated = np.repeat(result.terminated[:, None], self.n_agents, axis=1)
+        truncated = np.repeat(result.truncated[:, None], self.n_agents, axis=1)
+        return obs, result.rewards, terminated, truncated, info

@@ -1,0 +1,401 @@
+"""The physical world: disks in square arenas with viscous damping and walls. Physics only.
+
+Every array is batched over arenas: positions and velocities are ``(B, n_agents, 2)`` float64 in
+each arena's own frame (the arena is ``[-1, 1]²``). Agents ``0 … n_agents-2`` are predators and the
+last one is the prey: the world needs that much to know which pairs pass through each other.
+
+Dynamics (docs/spec.md, the arena; authors' code): velocity first, then position, no lag between an action
+and its effect::
+
+    v' = (1 - DAMPING) · v + a · DT
+    p' = p + v' · DT
+
+Two backends share this contract and the interface ``reset(arenas, positions[, obstacles])`` /
+``step(accelerations) -> Contacts``:
+
+- :class:`PymunkWorld` (the reference): one pymunk ``Space`` holds every arena, spaced apart on a
+  grid. We compute ``v'`` in numpy, write every velocity with ``pymunk.batch`` and let
+  ``space.step`` move the bodies (``space.damping = 1``, no forces), so pymunk moves each body by
+  exactly ``v' · DT``. pymunk owns the walls (thick static segments) and the contacts.
+- :class:`NumpyWorld`: the same arithmetic in vectorized numpy, with contacts from distances.
+
+Both put disks back at the walls with one small compiled kernel (:func:`touch_walls`).
+
+Obstacles (``obstacles > 0``): static circles, placed by the task at each reset (``reset``'s
+``obstacles``, (len(arenas), K, 3) rows of x, y, radius). Disks collide with them as solid,
+frictionless, perfectly inelastic bodies: a disk that ends a step overlapping one is put back
+touching it and loses the velocity that points into it (:func:`leave_obstacles`). In pymunk they
+are static circle shapes whose contacts its solver resolves (the velocity); the kernel then does
+the positions, as for the walls. The numpy backend does both in the kernel; the two agree to
+rounding (tests/test_obstacles.py). Obstacles keep a gap wider than a disk from each other and
+from the walls (the task's placement rule), so a disk touches at most one of them at a time and
+never an obstacle and a wall together.
+
+Contacts reported by ``step`` are those at the end of the step. Whatever the speed, no disk ends a
+step outside its arena: a disk that touches or crosses a wall is put back touching it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numba
+import numpy as np
+import pymunk
+import pymunk.batch
+
+from pursuit_bench.env.conditions import Backend as Backend  # physics backends: named with the task's options
+from pursuit_bench.env.conditions import WallRule
+
+#: Time step in seconds (paper 3.1).
+DT = 0.1
+#: Fraction of velocity lost per step to viscous drag (authors' code, ``damping = 0.25``).
+DAMPING = 0.25
+#: Disk radius of every agent (paper 3.1: diameter 0.1).
+RADIUS = 0.05
+#: Mass of every agent (authors' code).
+MASS = 1.0
+#: Half side of the square arena: x and y in [-1, 1] (paper 3.1).
+HALF_SIZE = 1.0
+#: Thickness of the pymunk walls: more than the longest step (1.44 · 0.1), so no disk tunnels.
+WALL_THICKNESS = 0.5
+#: pymunk's allowed overlap for processed contacts (its default 0.1 is twice our radius).
+COLLISION_SLOP = 1e-6
+#: A disk within this distance of a wall touches it: one resting against a wall may sit a
+#: rounding error inside (pymunk's solver leaves ~1e-12), and is still in contact.
+CONTACT_TOLERANCE = 1e-9
+#: pymunk broad phase: a spatial hash of this cell size with this many buckets per shape. For
+#: thousands of equal small disks it is about twice as fast as chipmunk's default bounding-box
+#: tree (measured at 256 and 1024 arenas); it changes which pairs are tested, never the contacts.
+HASH_CELL = 0.75
+HASH_BUCKETS_PER_SHAPE = 10
+
+_POSITION_VELOCITY = pymunk.batch.BodyFields.POSITION | pymunk.batch.BodyFields.VELOCITY
+
+
+@dataclass
+class Contacts:
+    """What touched what at the end of a step."""
+
+    wall: np.ndarray
+    """(B, n_agents) bool: the disk touches or crosses its arena's wall."""
+    prey: np.ndarray
+    """(B, n_predators) bool: the predator's disk overlaps the prey's."""
+    obstacle: np.ndarray
+    """(B, n_agents) bool: the disk touches an obstacle (always False without obstacles)."""
+
+
+class World(Protocol):
+    num_arenas: int
+    n_agents: int
+    positions: np.ndarray
+    velocities: np.ndarray
+    obstacles: np.ndarray
+    """(B, K, 3): each arena's obstacles, rows of x, y, radius."""
+
+    def reset(self, arenas: np.ndarray, positions: np.ndarray, obstacles: np.ndarray | None = None) -> None: ...
+
+    def step(self, accelerations: np.ndarray) -> Contacts: ...
+
+
+def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
+    """``v' = (1 - DAMPING) v + a DT``, the velocity half of the dynamics."""
+    return (1.0 - DAMPING) * velocities + accelerations * DT
+
+
+@numba.njit(cache=True)
+def _touch_walls_kernel(positions, velocities, limit, tolerance, contain, wall, moved):
+    for b in range(positions.shape[0]):
+        moved[b] = False
+        for i in range(positions.shape[1]):
+            touching = False
+            for d in range(2):
+                x = positions[b, i, d]
+                if abs(x) >= limit - tolerance:
+                    touching = True
+                if abs(x) > limit:
+                    if contain and velocities[b, i, d] * x > 0:
+                        velocities[b, i, d] = 0.0
+                    positions[b, i, d] = limit if x > 0 else -limit
+                    moved[b] = True
+            wall[b, i] = touching
+
+
+def touch_walls(
+    positions: np.ndarray, velocities: np.ndarray, limit: float, wall_rule: WallRule
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which disks touch or cross a wall (``|x|`` or ``|y| >= limit - CONTACT_TOLERANCE``),
+    (B, n) bool, and which arenas had a disk put back, (B,) bool. Disks that cross are put back
+    touching the wall, in place; under ``contain`` they also lose their outward velocity (a
+    perfectly inelastic wall)."""
+    wall = np.empty(positions.shape[:2], dtype=bool)
+    moved = np.empty(positions.shape[0], dtype=bool)
+    _touch_walls_kernel(positions, velocities, limit, CONTACT_TOLERANCE, wall_rule == "contain", wall, moved)
+    return wall, moved
+
+
+@numba.njit(cache=True)
+def _leave_obstacles_kernel(positions, velocities, obstacles, tolerance, touching, moved):
+    for b in range(positions.shape[0]):
+        moved[b] = False
+        for i in range(positions.shape[1]):
+            touching[b, i] = False
+            for k in range(obstacles.shape[1]):
+                dx = positions[b, i, 0] - obstacles[b, k, 0]
+                dy = positions[b, i, 1] - obstacles[b, k, 1]
+                reach = obstacles[b, k, 2] + RADIUS
+                d2 = dx * dx + dy * dy
+                if d2 <= (reach + tolerance) ** 2:
+                    touching[b, i] = True
+                if d2 < reach * reach:
+                    d = np.sqrt(d2)
+                    nx, ny = (dx / d, dy / d) if d > 0 else (1.0, 0.0)
+                    positions[b, i, 0] = obstacles[b, k, 0] + nx * reach
+                    positions[b, i, 1] = obstacles[b, k, 1] + ny * reach
+                    inward = velocities[b, i, 0] * nx + velocities[b, i, 1] * ny
+                    if inward < 0:
+                        velocities[b, i, 0] -= inward * nx
+                        velocities[b, i, 1] -= inward * ny
+                    moved[b] = True
+
+
+def leave_obstacles(
+    positions: np.ndarray, velocities: np.ndarray, obstacles: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which disks touch an obstacle (centres within its radius + ``RADIUS`` +
+    ``CONTACT_TOLERANCE``), (B, n) bool, and which arenas had a disk put back, (B,) bool. A disk
+    overlapping an obstacle is put back touching it, along the line from the obstacle's centre,
+    and loses the part of its velocity pointing into it; in place. Without obstacles (K = 0)
+    nothing touches and nothing moves."""
+    touching = np.empty(positions.shape[:2], dtype=bool)
+    moved = np.empty(positions.shape[0], dtype=bool)
+    _leave_obstacles_kernel(positions, velocities, obstacles, CONTACT_TOLERANCE, touching, moved)
+    return touching, moved
+
+
+def _prey_overlap(positions: np.ndarray) -> np.ndarray:
+    delta = positions[:, :-1] - positions[:, -1:]
+    return (delta * delta).sum(axis=-1) < (2 * RADIUS) ** 2
+
+
+class NumpyWorld:
+    """The dynamics in vectorized numpy: the fast backend.
+
+    Contacts are decided on distances: a disk touches the wall when ``|x| >= half_size - r`` (or
+    ``|y|``), a predator overlaps the prey when their centres are closer than ``2 r``. Under
+    ``contain`` a disk that crosses the wall is clamped to it and loses its outward velocity.
+    """
+
+    def __init__(
+        self,
+        num_arenas: int,
+        n_agents: int,
+        *,
+        wall_rule: WallRule = "terminate",
+        half_size: float = HALF_SIZE,
+        obstacles: int = 0,
+    ) -> None:
+        self.num_arenas = num_arenas
+        self.n_agents = n_agents
+        self.wall_rule = wall_rule
+        self.limit = half_size - RADIUS
+        self.positions = np.zeros((num_arenas, n_agents, 2))
+        self.velocities = np.zeros((num_arenas, n_agents, 2))
+        self.obstacles = np.zeros((num_arenas, obstacles, 3))
+
+    def reset(self, arenas: np.ndarray, positions: np.ndarray, obstacles: np.ndarray | None = None) -> None:
+        self.positions[arenas] = positions
+        self.velocities[arenas] = 0.0
+        if obstacles is not None:
+            self.obstacles[arenas] = obstacles
+
+    def step(self, accelerations: np.ndarray) -> Contacts:
+        v = integrate_velocity(self.velocities, accelerations)
+        p = self.positions + v * DT
+        obstacle, _ = leave_obstacles(p, v, self.obstacles)
+        wall, _ = touch_walls(p, v, self.limit, self.wall_rule)
+        self.positions, self.velocities = p, v
+        return Contacts(wall=wall, prey=_prey_overlap(p), obstacle=obstacle)
+
+
+_WALL, _PREDATOR, _PREY, _OBSTACLE = 1, 2, 3, 4
+
+
+class PymunkWorld:
+    """The reference backend: every arena in one pymunk ``Space``.
+
+    Arenas sit on a square grid, ``2 (half_size + WALL_THICKNESS)`` apart, so they never touch.
+    Predators share a shape-filter group and so pass through each other; predator–prey contacts
+    are reported by a collision callback and never pushed apart (a capture ends the episode).
+    Under ``contain`` pymunk's solver stops disks at the walls (perfectly inelastic,
+    frictionless); under ``terminate`` the walls are sensors (the episode ends there, nothing is
+    pushed back). Whether a disk touches a wall is decided on its position (:func:`touch_walls`),
+    which also catches every contact pymunk would report. Obstacles are circles on the space's
+    static body, moved at each reset (``unsafe_set_offset``, then reindexed).
+    """
+
+    def __init__(
+        self,
+        num_arenas: int,
+        n_agents: int,
+        *,
+        wall_rule: WallRule = "terminate",
+        half_size: float = HALF_SIZE,
+        obstacles: int = 0,
+    ) -> None:
+        self.num_arenas = num_arenas
+        self.n_agents = n_agents
+        self.wall_rule = wall_rule
+        self.limit = half_size - RADIUS
+        self._prey = np.zeros((num_arenas, n_agents - 1), dtype=bool)
+
+        space = pymunk.Space()
+        space.damping = 1.0  # damping is applied in integrate_velocity, not by pymunk
+        space.collision_slop = COLLISION_SLOP
+        # No positional bias: the position check below puts disks back, so pymunk's own push-out
+        # would correct the same overlap twice and bounce the disk off the wall.
+        space.collision_bias = 1.0
+        self.space = space
+        columns = int(np.ceil(np.sqrt(num_arenas)))
+        spacing = 2 * (half_size + WALL_THICKNESS)
+        self.offsets = np.array(
+            [[(i % columns) * spacing, (i // columns) * spacing] for i in range(num_arenas)],
+            dtype=np.float64,
+        )
+        self._index: dict[pymunk.Shape, tuple[int, int]] = {}
+        predators = pymunk.ShapeFilter(group=1)
+        for arena, (ox, oy) in enumerate(self.offsets):
+            self._add_walls(ox, oy, half_size)
+            for agent in range(n_agents):
+                body = pymunk.Body(MASS, float("inf"))  # disks never rotate
+                body.position = (ox, oy)
+                disk = pymunk.Circle(body, RADIUS)
+                disk.friction = 0.0
+                disk.elasticity = 0.0
+                is_prey = agent == n_agents - 1
+                disk.collision_type = _PREY if is_prey else _PREDATOR
+                if not is_prey:
+                    disk.filter = predators
+                space.add(body, disk)
+                self._index[disk] = (arena, agent)
+        self.obstacles = np.zeros((num_arenas, obstacles, 3))
+        if obstacles:
+            # Contacts solved afresh each step: an arbiter kept from an earlier contact (pymunk's
+            # default keeps them 3 steps) warm-starts the solver with that contact's impulse,
+            # and the velocity then differs from a fresh solve (measured: 1e-4 within 12 steps).
+            space.collision_persistence = 0
+        self._obstacle_shapes: list[list[pymunk.Circle]] = []
+        for ox, oy in self.offsets:
+            shapes = [pymunk.Circle(space.static_body, 0.0, (ox, oy)) for _ in range(obstacles)]
+            for shape in shapes:
+                shape.collision_type = _OBSTACLE
+                shape.friction = 0.0
+                shape.elasticity = 0.0
+                space.add(shape)
+            self._obstacle_shapes.append(shapes)
+        space.use_spatial_hash(HASH_CELL, HASH_BUCKETS_PER_SHAPE * len(space.shapes))
+        space.on_collision(_PREDATOR, _PREY, pre_solve=self._on_capture)
+
+        self._offsets_per_body = np.repeat(self.offsets, n_agents, axis=0)
+        self._offset = bool(self.offsets.any())  # a single arena sits at the origin
+        # pymunk.batch visits the dynamic bodies in the order they were added, then the space's
+        # static body (which holds the walls): one trailing row, kept at zero, stands for it.
+        # Reads append into memory pymunk owns (and may grow); writes lend it two arrays of ours.
+        self._bodies = num_arenas * n_agents
+        self._read_buffer = pymunk.batch.Buffer()
+        self._state = np.zeros((self._bodies + 1, 4))  # px, py, vx, vy per body
+        self._state_buffer = pymunk.batch.Buffer()
+        self._state_buffer.set_float_buf(self._state.reshape(-1))
+        self._moved = False  # disks moved by us since pymunk last stepped: write their positions
+        self._velocity = np.zeros((self._bodies + 1, 2))  # vx, vy per body
+        self._velocity_buffer = pymunk.batch.Buffer()
+        self._velocity_buffer.set_float_buf(self._velocity.reshape(-1))
+        self.positions = np.zeros((num_arenas, n_agents, 2))
+        self.velocities = np.zeros((num_arenas, n_agents, 2))
+
+    def _add_walls(self, ox: float, oy: float, half_size: float) -> None:
+        t = WALL_THICKNESS / 2  # segment radius: the inner face is at ±half_size
+        c = half_size + t
+        corners = [(-c, -c), (c, -c), (c, c), (-c, c)]
+        for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1], strict=True):
+            wall = pymunk.Segment(self.space.static_body, (ox + ax, oy + ay), (ox + bx, oy + by), t)
+            wall.collision_type = _WALL
+            wall.sensor = self.wall_rule == "terminate"  # the episode ends there: never pushed back
+            wall.friction = 0.0
+            wall.elasticity = 0.0
+            self.space.add(wall)
+
+    def _on_capture(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        arena, agent = self._index[arbiter.shapes[0]]
+        self._prey[arena, agent] = True
+        arbiter.process_collision = False
+
+    def _read(self) -> None:
+        self._read_buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, _POSITION_VELOCITY, self._read_buffer)
+        state = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
+        shape = (self.num_arenas, self.n_agents, 2)
+        positions = state[:, :2] - self._offsets_per_body if self._offset else state[:, :2].copy()
+        self.positions = positions.reshape(shape)
+        self.velocities = state[:, 2:].reshape(shape).copy()
+
+    def reset(self, arenas: np.ndarray, positions: np.ndarray, obstacles: np.ndarray | None = None) -> None:
+        self.positions[arenas] = positions
+        self.velocities[arenas] = 0.0
+        self._moved = True  # pymunk learns the new positions with the next step's velocities
+        if obstacles is not None:
+            self.obstacles[arenas] = obstacles
+            for arena, rows in zip(np.asarray(arenas).tolist(), obstacles, strict=True):
+                ox, oy = self.offsets[arena]
+                for shape, (x, y, radius) in zip(self._obstacle_shapes[arena], rows, strict=True):
+                    shape.unsafe_set_offset((ox + x, oy + y))
+                    shape.unsafe_set_radius(radius)
+                    self.space.reindex_shape(shape)
+
+    def _write(self, velocities: np.ndarray) -> None:
+        """Give pymunk the velocities for this step, and the positions too if we moved disks
+        (a reset, or putting them back at a wall) since it last stepped."""
+        if self._moved:
+            flat = self._state
+            flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
+            flat[:-1, 2:] = velocities.reshape(-1, 2)
+            pymunk.batch.set_space_bodies(self.space, _POSITION_VELOCITY, self._state_buffer)
+            self._moved = False
+        else:
+            self._velocity[:-1] = velocities.reshape(-1, 2)
+            pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._velocity_buffer)
+
+    def step(self, accelerations: np.ndarray) -> Contacts:
+        self._prey.fill(False)
+        self._write(integrate_velocity(self.velocities, accelerations))
+        self.space.step(DT)
+        self._read()
+        obstacle, pushed = leave_obstacles(self.positions, self.velocities, self.obstacles)
+        wall, moved = touch_walls(self.positions, self.velocities, self.limit, self.wall_rule)
+        moved |= pushed
+        prey = self._prey.copy()
+        if moved.any():
+            self._moved = True
+            # pymunk saw those arenas before their disks were put back: decide their captures
+            # on the positions the step ends with
+            prey[moved] = _prey_overlap(self.positions[moved])
+        return Contacts(wall=wall, prey=prey, obstacle=obstacle)
+
+
+def make_world(
+    backend: Backend,
+    num_arenas: int,
+    n_agents: int,
+    *,
+    wall_rule: WallRule = "terminate",
+    half_size: float = HALF_SIZE,
+    obstacles: int = 0,
+) -> World:
+    """Build a world of the named backend (``"pymunk"``, the reference, or ``"numpy"``) with
+    room for ``obstacles`` obstacles per arena."""
+    if backend == "pymunk":
+        return PymunkWorld(num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size, obstacles=obstacles)
+    if backend == "numpy":
+        return NumpyWorld(num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size, obstacles=obstacles)
+    raise ValueError(f"backend={backend!r}: expected 'pymunk' or 'numpy'")

@@ -1,0 +1,2 @@
+"""The ground floor: files written atomically, the run folder's lock, stopping cleanly on SIGINT
+and SIGTERM. Imports nothing of the package; any layer may import it."""

@@ -1,0 +1,108 @@
+"""Biological pursuit rules as pure functions of predator observations (batched over any leading
+axes). A predator observation starts ``[x, y, own velocity (u, v), prey x, prey y, prey relative
+position (u, v), prey velocity (u, v), …]`` in the predator's line-of-sight (LOS) frame.
+
+- :func:`parallel_navigation`: the paper's rule (section 2.4) choosing the direction that keeps the
+  absolute target direction φ most nearly constant.
+- :func:`pure_pursuit`: always straight at the prey (k = 0), for comparison.
+- :func:`constant_bearing_angle`: the classic constant-bearing course
+  ``β = arcsin(|v_t| sin α / |v_p|)`` (Ghose et al. 2006), which parallel navigation approximates.
+- :func:`avoid`: obstacle avoidance on the range readings (a task with obstacles): keep the
+  chosen direction unless something solid is closer than :data:`SAFETY_DISTANCE` along it, then
+  take the nearest free direction. :func:`navigate` is the lower layer of the hierarchical
+  predator and of the scripted baselines: parallel navigation, with or without avoidance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pursuit_bench.env.obstacles import RANGE_CAP
+from pursuit_bench.env.task import ACCEL_CHASE, ACCEL_STALK, CHASE, DIRECTION_STEP, N_DIRECTIONS
+from pursuit_bench.env.world import DAMPING, DT
+
+#: Directions on the approaching side, within ±90° of the LOS (paper 2.4).
+APPROACH_DIRECTIONS = np.array([9, 10, 11, 0, 1, 2, 3])
+#: Two predicted changes of φ closer than this (radians) count as a tie.
+TIE_TOLERANCE = 1e-12
+#: A direction is blocked for :func:`avoid` when its range reading is below this: a little less
+#: than two steps at a predator's top speed (0.144 per step).
+SAFETY_DISTANCE = 0.25
+
+_OWN_VEL = slice(2, 4)
+_PREY_REL = slice(6, 8)
+_PREY_VEL = slice(8, 10)
+_ANGLES = -DIRECTION_STEP * APPROACH_DIRECTIONS
+_DIRS = np.stack([np.cos(_ANGLES), np.sin(_ANGLES)], axis=-1)  # (7, 2) in the LOS frame
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def parallel_navigation(observations: np.ndarray, modes: np.ndarray | int) -> np.ndarray:
+    """Direction index per predator observation for the given mode(s) (0 stalk, 1 chase).
+
+    Among ``k ∈ {9, 10, 11, 0, 1, 2, 3}`` pick the one whose predicted next step changes the
+    absolute target direction least, ``argmin |wrap(φ' - φ)|``: the predator's next position from
+    the world's dynamics, the prey's from its current velocity. Ties go to the smaller predicted
+    distance. Works in the LOS frame, where φ is the angle of the prey's relative position.
+    """
+    obs = np.asarray(observations, dtype=np.float64)
+    modes = np.broadcast_to(np.asarray(modes), obs.shape[:-1])
+    accel = np.where(modes == CHASE, ACCEL_CHASE, ACCEL_STALK)[..., None, None]
+    own_v = obs[..., None, _OWN_VEL]
+    prey_rel = obs[..., None, _PREY_REL]
+    prey_next = prey_rel + obs[..., None, _PREY_VEL] * DT
+    own_next = ((1.0 - DAMPING) * own_v + accel * DT * _DIRS) * DT  # (…, 7, 2), from the origin
+    line = prey_next - own_next
+    phi = np.arctan2(prey_rel[..., 1], prey_rel[..., 0])
+    change = np.abs(_wrap(np.arctan2(line[..., 1], line[..., 0]) - phi))
+    distance = np.hypot(line[..., 0], line[..., 1])
+    best = change.min(axis=-1, keepdims=True)
+    tied = change <= best + TIE_TOLERANCE
+    choice = np.argmin(np.where(tied, distance, np.inf), axis=-1)
+    return APPROACH_DIRECTIONS[choice]
+
+
+def pure_pursuit(observations: np.ndarray) -> np.ndarray:
+    """Always straight at the prey: direction index 0 for every observation."""
+    return np.zeros(np.asarray(observations).shape[:-1], dtype=np.int64)
+
+
+def constant_bearing_angle(target_speed: float, pursuer_speed: float, alpha: float) -> float:
+    """Course angle β relative to the LOS that keeps the bearing to a constant-velocity target
+    constant: ``β = arcsin(|v_t| sin α / |v_p|)``. ``alpha`` is the angle between the target's
+    velocity and the vector from the target to the pursuer (radians). Returns NaN where no such
+    course exists (``|v_t sin α| > |v_p|``)."""
+    if pursuer_speed <= 0:
+        raise ValueError(f"pursuer_speed={pursuer_speed!r}: expected a speed > 0")
+    ratio = abs(target_speed) * np.sin(alpha) / pursuer_speed
+    return float(np.arcsin(ratio)) if abs(ratio) <= 1 else float("nan")
+
+
+def avoid(directions: np.ndarray, ranges: np.ndarray, safety: float = SAFETY_DISTANCE) -> np.ndarray:
+    """Obstacle avoidance: each direction index (...) kept when its range reading (``ranges``
+    (..., 12), the observation's last 12 entries in a task with obstacles) is at least
+    ``safety``; otherwise the free direction (reading >= ``safety``) fewest 30° steps away from
+    it, ties to the longer reading, then to the lower index; with none free, the direction with
+    the longest reading. A free direction is always taken when there is one."""
+    directions = np.asarray(directions)
+    ranges = np.asarray(ranges, dtype=np.float64)
+    turn = np.abs(np.arange(N_DIRECTIONS) - directions[..., None]) % N_DIRECTIONS
+    turn = np.minimum(turn, N_DIRECTIONS - turn)
+    free = ranges >= safety
+    cost = np.where(free, turn - 0.5 * np.clip(ranges, 0.0, RANGE_CAP) / RANGE_CAP, np.inf)
+    return np.where(free.any(axis=-1), np.argmin(cost, axis=-1), np.argmax(ranges, axis=-1))
+
+
+def navigate(observations: np.ndarray, modes: np.ndarray | int, *, avoidance: bool = False) -> np.ndarray:
+    """The lower layer: :func:`parallel_navigation`, then with ``avoidance`` :func:`avoid` on the
+    observations' range readings (their last 12 entries: only in a task with obstacles)."""
+    return around_obstacles(parallel_navigation(observations, modes), observations, avoidance)
+
+
+def around_obstacles(directions: np.ndarray, observations: np.ndarray, avoidance: bool) -> np.ndarray:
+    """``directions`` as they are, or with ``avoidance`` through :func:`avoid` on the
+    observations' range readings (their last 12 entries: only in a task with obstacles)."""
+    return avoid(directions, np.asarray(observations)[..., -N_DIRECTIONS:]) if avoidance else directions

@@ -1,0 +1,272 @@
+"""Running fixed agents for many episodes in B arenas and collecting what they did."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from pursuit_bench.agents.kinds import HierarchicalPredator, ScriptedAgent
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.env.perturbations import Perturbations, PerturbedEnv
+from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
+from pursuit_bench.env.world import Backend
+from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
+from pursuit_bench.training.recording import EpisodeTraces, Recorder
+
+
+class Actor(Protocol):
+    def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any: ...
+
+
+@dataclass
+class Episodes:
+    """Per-episode results, in the order the episodes finished."""
+
+    returns: np.ndarray
+    """(E, n_agents) cumulative reward."""
+    lengths: np.ndarray
+    """(E,) steps."""
+    captured: np.ndarray
+    """(E,) bool."""
+    chase_fraction: np.ndarray
+    """(E, n_predators) fraction of steps in chase mode."""
+    distance: np.ndarray
+    """(E, n_agents) distance travelled."""
+    left_area: np.ndarray
+    """(E, n_agents) bool: the agent touched a wall on the episode's last step."""
+    collisions: np.ndarray
+    """(E, n_agents) collisions with obstacles: steps on which the agent came to touch one it
+    had not touched on the step before (0 without obstacles)."""
+    contact_steps: np.ndarray
+    """(E, n_agents) steps that ended with the agent touching an obstacle."""
+
+
+def run_episodes(
+    condition: str,
+    actors: dict[str, Actor],
+    episodes: int,
+    *,
+    seed: int,
+    num_envs: int = 16,
+    epsilons: dict[str, float] | None = None,
+    backend: Backend = "pymunk",
+    recorder: Recorder | None = None,
+    record: Callable[[int], bool] = lambda episode: True,
+    on_step: Callable[[np.ndarray, np.ndarray, np.ndarray], None] | None = None,
+    check: Callable[[], None] = lambda: None,
+    task_options: Mapping[str, Any] | None = None,
+    perturbations: Perturbations | None = None,
+) -> Episodes:
+    """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
+    ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
+    ``recorder``, the episodes numbered (from 1, in the order they end) where ``record`` says so
+    go into it, with the hierarchical predators' Q-values and V(s). ``on_step(obs, actions,
+    done)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
+    (B, n_agents, 2) and which arenas' episodes the step ended (B,). ``check()`` is called
+    before every step: the place to stop (by raising) when the caller was asked to.
+    ``task_options``: task options beside the condition (``obstacles``, ``obstacle_radius``).
+    ``perturbations``: the world's changes join the task options, and the agents sense and act
+    through :class:`~pursuit_bench.env.perturbations.PerturbedEnv` (seeded by ``seed``)."""
+    p = perturbations or Perturbations()
+    options = {**(task_options or {}), **p.task_options()}
+    plain = VectorPursuitEnv(min(num_envs, episodes), condition, backend=backend, **options)
+    env = PerturbedEnv(plain, p, seed) if p.senses else plain
+    epsilons = epsilons or {}
+    names, n_pred = env.agents, env.n_agents - 1
+    obs, _ = env.reset(seed=seed)
+    traces = None
+    if recorder is not None:
+        traces = EpisodeTraces(env.core.world.positions, env.config.max_steps, env.core.obstacles)
+    chase = np.zeros((env.num_envs, n_pred))
+    travelled = np.zeros((env.num_envs, env.n_agents))
+    touching = np.zeros((env.num_envs, env.n_agents), dtype=bool)
+    collisions = np.zeros((env.num_envs, env.n_agents))
+    contact = np.zeros((env.num_envs, env.n_agents))
+    rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    while len(rows) < episodes:
+        check()
+        actions = np.zeros((env.num_envs, env.n_agents, 2), dtype=np.int64)
+        q_values = np.full((env.num_envs, n_pred, 2), np.nan)
+        values = np.full((env.num_envs, n_pred), np.nan)
+        for i, name in enumerate(names):
+            actor, eps = actors[name], epsilons.get(name)
+            if traces is not None and isinstance(actor, HierarchicalPredator):
+                _, chosen, q_values[:, i], values[:, i] = actor.decide(obs[:, i], explore=eps is not None, epsilon=eps)
+            else:
+                chosen = np.asarray(actor.act_batch(obs[:, i], explore=eps is not None, epsilon=eps))
+            put_actions(actions, i, chosen)
+        before = env.core.world.positions.copy()
+        acted_on = obs
+        obs, rewards, _, truncated, info = env.step(actions)
+        if on_step is not None:
+            on_step(acted_on, actions, info["done"])
+        travelled += np.hypot(*(info["positions"] - before).transpose(2, 0, 1))
+        chase += actions[:, :-1, 0]
+        collisions += info["touching_obstacle"] & ~touching
+        contact += info["touching_obstacle"]
+        touching = info["touching_obstacle"] & ~info["done"][:, None]
+        if traces is not None:
+            traces.add_step(actions, rewards, info, q_values, values)
+        for arena in np.flatnonzero(info["done"]):
+            length = int(info["episode_length"][arena])
+            rows.append(
+                (
+                    info["episode_return"][arena].copy(),
+                    length,
+                    bool(info["captured"][arena]),
+                    chase[arena] / length,
+                    travelled[arena].copy(),
+                    info["left_area"][arena].copy(),
+                    collisions[arena].copy(),
+                    contact[arena].copy(),
+                )
+            )
+            chase[arena] = 0.0
+            travelled[arena] = 0.0
+            collisions[arena] = 0.0
+            contact[arena] = 0.0
+            if traces is not None and recorder is not None:
+                trace = traces.finish(
+                    int(arena),
+                    bool(truncated[arena, 0]),
+                    env.core.world.positions[arena],
+                    env.core.world.obstacles[arena],
+                )
+                if len(rows) <= episodes and record(len(rows)):
+                    recorder.log_episode(len(rows), trace)
+    rows = rows[:episodes]
+    return Episodes(
+        returns=np.array([r[0] for r in rows]),
+        lengths=np.array([r[1] for r in rows]),
+        captured=np.array([r[2] for r in rows]),
+        chase_fraction=np.array([r[3] for r in rows]).reshape(len(rows), n_pred),
+        distance=np.array([r[4] for r in rows]),
+        left_area=np.array([r[5] for r in rows]).reshape(len(rows), len(names)),
+        collisions=np.array([r[6] for r in rows]).reshape(len(rows), len(names)),
+        contact_steps=np.array([r[7] for r in rows]).reshape(len(rows), len(names)),
+    )
+
+
+def standard_error(values: np.ndarray) -> float:
+    """The standard error of the mean of ``values`` (0 for a single value)."""
+    return float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
+
+
+def evaluate_agents(
+    condition: str,
+    agents: dict[str, Actor],
+    *,
+    episodes: int,
+    seed: int,
+    prey_epsilon: float | None = 0.1,
+    num_envs: int = 64,
+    recorder: Recorder | None = None,
+    backend: Backend = "pymunk",
+    predator_kind: str | None = None,
+    check: Callable[[], None] = lambda: None,
+    task_options: Mapping[str, Any] | None = None,
+    avoidance: bool = False,
+    perturbations: Perturbations | None = None,
+    prey_check: bool = True,
+) -> dict[str, Any]:
+    """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
+    learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
+    cumulative reward as trained, then with it replaced by always-chase and by always-stalk,
+    the other agents fixed; every variant plays the same seeds. Also the capture rate, time to
+    capture, distance travelled and fraction of steps in chase, as trained. The episodes as
+    trained go into ``recorder``. With a learning prey, ``prey_check`` compares it, greedy,
+    with ``FleeingPrey`` in its place against the same predators on the same seeds: return,
+    wall exits, captures, survival to the time limit.
+
+    Each panel holds the mean returns ``trained`` (the predator as trained), ``always_chase``
+    and ``always_stalk``, their standard errors and every episode's return (``stderr``,
+    ``episode_returns``, keyed alike); ``predator_kind`` names what the trained predators are (``hierarchical``,
+    ``flat``, …; by default read from the first predator's ``kind``). ``check()`` is called
+    before every step (:func:`run_episodes`).
+
+    With obstacles (``task_options``), the baselines' lower layer avoids them as ``avoidance``
+    says (that of the trained predators), the scripted prey avoids them, and the result holds
+    ``obstacle_collisions`` and ``obstacle_contact_steps``: each agent's collisions and steps
+    in contact per episode, as trained (:class:`Episodes`).
+
+    ``perturbations`` (:mod:`pursuit_bench.env.perturbations`) change every variant's world and
+    senses alike; the result names them (``perturbations``). ``prey_check=False`` skips the
+    prey's check (two plays fewer)."""
+    names = list(agents)
+    obstacles = bool((task_options or {}).get("obstacles"))
+    predators, prey = names[:-1], names[-1]
+    kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
+    epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
+
+    def play(actors: dict[str, Actor], rec: Recorder | None = None, greedy: bool = False) -> Episodes:
+        return run_episodes(
+            condition,
+            actors,
+            episodes,
+            seed=seed,
+            num_envs=num_envs,
+            epsilons={} if greedy else epsilons,
+            recorder=rec,
+            backend=backend,
+            check=check,
+            task_options=task_options,
+            perturbations=perturbations,
+        )
+
+    trained = play(agents, recorder)
+    panels = []
+    for i, name in enumerate(predators):
+        chase = play({**agents, name: ScriptedAgent(name, AlwaysChase(avoidance=avoidance))})
+        stalk = play({**agents, name: ScriptedAgent(name, AlwaysStalk(avoidance=avoidance))})
+        variants = {"trained": trained, "always_chase": chase, "always_stalk": stalk}
+        panels.append(
+            {
+                "predator": name,
+                **{key: float(played.returns[:, i].mean()) for key, played in variants.items()},
+                "stderr": {key: standard_error(played.returns[:, i]) for key, played in variants.items()},
+                "episode_returns": {key: played.returns[:, i].round(6).tolist() for key, played in variants.items()},
+            }
+        )
+    captured = trained.captured
+    checked = None
+    if prey_epsilon is not None and prey_check:  # a learning prey: greedy, and the scripted one in its place
+        greedy = play(agents, greedy=True)
+        fleeing = play({**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))}, greedy=True)
+        checked = {
+            name: {
+                "return": float(played.returns[:, -1].mean()),
+                "left_area": float(played.left_area[:, -1].mean()),
+                "captured": float(played.captured.mean()),
+                "survived": float((played.lengths == CONDITIONS[condition].max_steps).mean()),
+            }
+            for name, played in (("learned_greedy", greedy), ("fleeing_prey", fleeing))
+        }
+    return {
+        "condition": condition,
+        "episodes": episodes,
+        "seed": seed,
+        "predator_kind": kind,
+        "prey_kind": str(getattr(agents[prey], "kind", "prey")),
+        "panels": panels,
+        "capture_rate": float(captured.mean()),
+        "time_to_capture_s": float(trained.lengths[captured].mean() * 0.1) if captured.any() else None,
+        "episode_length": float(trained.lengths.mean()),
+        "mean_return": {a: float(r) for a, r in zip(names, trained.returns.mean(axis=0), strict=True)},
+        "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
+        "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
+        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon},
+        "prey_check": checked,
+        **({"perturbations": perturbations.changed} if perturbations is not None and perturbations.changed else {}),
+        **(
+            {
+                "task_options": dict(task_options or {}),
+                "obstacle_collisions": dict(zip(names, trained.collisions.mean(axis=0).tolist(), strict=True)),
+                "obstacle_contact_steps": dict(zip(names, trained.contact_steps.mean(axis=0).tolist(), strict=True)),
+            }
+            if obstacles
+            else {}
+        ),
+    }
