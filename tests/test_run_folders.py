@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import rerun.chunk as rc
+import torch
 from cli_helpers import cli_command, lines, run_cli, wait_for, wait_until
 
 import pursuit_bench
@@ -253,3 +254,53 @@ def test_sigterm_at_any_moment_of_eval_leaves_old_files_or_complete_new_ones(tmp
             assert result["seed"] == 3 and result["episodes"] == 40
             before = now
     assert 143 in outcomes
+
+
+def checkpoint_agents(folder: Path) -> dict:
+    return torch.load(folder / "checkpoint.pt", weights_only=True)["agents"]
+
+
+def assert_same(a: object, b: object, where: str = "agents") -> None:
+    if isinstance(a, torch.Tensor):
+        assert isinstance(b, torch.Tensor) and torch.equal(a, b), where
+    elif isinstance(a, dict):
+        assert isinstance(b, dict) and set(a) == set(b), where
+        for key in a:
+            assert_same(a[key], b[key], f"{where}/{key}")
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for k, (x, y) in enumerate(zip(a, b, strict=True)):
+            assert_same(x, y, f"{where}[{k}]")
+    else:
+        assert a == b, where
+
+
+@pytest.mark.parametrize(("condition", "physics"), [("1p-low", "pymunk"), ("3p-low-individual", "numpy")])
+def test_a_resumed_run_equals_one_trained_in_one_go(tmp_path: Path, condition: str, physics: str) -> None:
+    """N episodes, then a resume to 2N, equal 2N in one go: every metrics row (ε and β
+    included) and every weight, optimiser moment and replay entry, bit for bit."""
+    options = ["--condition", condition, "--physics", physics, "--preset", "quick", "--no-record", "--seed", "3"]
+    code, output = run_cli("train", "--out", str(tmp_path / "a"), *options, "--episodes", "30")
+    assert code == 0, output
+    code, output = run_cli("train", "--out", str(tmp_path / "a"), "--resume", "--episodes", "60")
+    assert code == 0, output
+    code, output = run_cli("train", "--out", str(tmp_path / "b"), *options, "--episodes", "60")
+    assert code == 0, output
+    resumed = (tmp_path / "a" / "metrics.jsonl").read_text().splitlines()
+    in_one_go = (tmp_path / "b" / "metrics.jsonl").read_text().splitlines()
+    assert len(resumed) == 60 and resumed == in_one_go
+    assert_same(checkpoint_agents(tmp_path / "a"), checkpoint_agents(tmp_path / "b"))
+
+
+def test_a_checkpoint_without_the_arenas_still_resumes(tmp_path: Path) -> None:
+    """Checkpoints written before the arenas were saved restart them, as they used to."""
+    out = tmp_path / "run"
+    train_tiny(out, "--no-record", episodes=6)
+    state = torch.load(out / "checkpoint.pt", weights_only=True)
+    del state["arenas"], state["pending"], state["last_losses"]
+    torch.save(state, out / "checkpoint.pt")
+    code, output = run_cli("train", "--out", str(out), "--resume", "--episodes", "10", "--no-record")
+    assert code == 0, output
+    assert [json.loads(row)["episode"] for row in (out / "metrics.jsonl").read_text().splitlines()] == list(
+        range(1, 11)
+    )

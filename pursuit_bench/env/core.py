@@ -7,6 +7,7 @@ Everything here is arrays shaped ``(B, n_agents, …)``; no dicts of agent names
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -114,6 +115,28 @@ class PursuitCore:
                 self._starts[arena] = (rng, ahead)
             starts[k], placed[k] = ahead.pop()
         return starts, (placed if config.obstacles else None)
+
+    def state_dict(self) -> dict[str, Any]:
+        """The arenas as they are mid-episode (for a checkpoint): the world, the step counts,
+        the lines of sight and each arena's start layouts drawn ahead."""
+        return {
+            "world": self.world.snapshot(),
+            "steps": self.steps.copy(),
+            "los": self._los.copy(),
+            "starts": {
+                arena: [[layout, placed] for layout, placed in ahead] for arena, (_, ahead) in self._starts.items()
+            },
+        }
+
+    def load_state_dict(self, state: dict[str, Any], rngs: list[np.random.Generator]) -> None:
+        """Put back :meth:`state_dict`; ``rngs``: each arena's generator, which drew its layouts."""
+        self.world.restore(state["world"])
+        self.steps = np.array(state["steps"], dtype=np.int64)
+        self._los = np.array(state["los"], dtype=np.float64)
+        self._starts = {
+            int(arena): (rngs[int(arena)], [(np.asarray(layout), np.asarray(placed)) for layout, placed in ahead])
+            for arena, ahead in state["starts"].items()
+        }
 
     def state(self) -> np.ndarray:
         """(B, 4 n_agents [+ 3 K]) float32 global state: ``[x, y, vx, vy]`` per agent, world

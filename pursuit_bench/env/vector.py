@@ -100,6 +100,27 @@ class VectorPursuitEnv:
         self._returns[:] = 0.0
         return obs, {}
 
+    def state_dict(self) -> dict[str, Any]:
+        """Every arena as it is mid-episode, with its generator and return so far: with
+        :meth:`load_state_dict`, an env that goes on exactly as this one would (a checkpoint)."""
+        return {
+            "rngs": [rng.bit_generator.state for rng in self._rngs],
+            "returns": self._returns.copy(),
+            "core": self.core.state_dict(),
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Put back :meth:`state_dict` (of an env of the same task and number of arenas)."""
+        if len(state["rngs"]) != self.num_envs:
+            raise ValueError(f"state of {len(state['rngs'])} arenas: expected {self.num_envs}")
+        self._rngs = []
+        for saved in state["rngs"]:
+            rng = np.random.default_rng()
+            rng.bit_generator.state = saved
+            self._rngs.append(rng)
+        self._returns = np.array(state["returns"], dtype=np.float64)
+        self.core.load_state_dict(state["core"], self._rngs)
+
     def _check(self, actions: np.ndarray) -> np.ndarray:
         arr = np.asarray(actions)
         expected = (self.num_envs, self.n_agents, 2)

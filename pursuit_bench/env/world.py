@@ -38,7 +38,7 @@ step outside its arena: a disk that touches or crosses a wall is put back touchi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numba
 import numpy as np
@@ -97,6 +97,10 @@ class World(Protocol):
     def reset(self, arenas: np.ndarray, positions: np.ndarray, obstacles: np.ndarray | None = None) -> None: ...
 
     def step(self, accelerations: np.ndarray) -> Contacts: ...
+
+    def snapshot(self) -> dict[str, Any]: ...
+
+    def restore(self, state: dict[str, Any]) -> None: ...
 
 
 def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
@@ -209,6 +213,20 @@ class NumpyWorld:
         self.velocities[arenas] = 0.0
         if obstacles is not None:
             self.obstacles[arenas] = obstacles
+
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """Everything the next step depends on (for a checkpoint): see :meth:`restore`."""
+        return {
+            "positions": self.positions.copy(),
+            "velocities": self.velocities.copy(),
+            "obstacles": self.obstacles.copy(),
+        }
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Put back a :meth:`snapshot`: the next step is the one that would have followed it."""
+        self.positions = np.array(state["positions"], dtype=np.float64)
+        self.velocities = np.array(state["velocities"], dtype=np.float64)
+        self.obstacles = np.array(state["obstacles"], dtype=np.float64)
 
     def step(self, accelerations: np.ndarray) -> Contacts:
         v = integrate_velocity(self.velocities, accelerations)
@@ -345,13 +363,42 @@ class PymunkWorld:
         self.velocities[arenas] = 0.0
         self._moved = True  # pymunk learns the new positions with the next step's velocities
         if obstacles is not None:
-            self.obstacles[arenas] = obstacles
-            for arena, rows in zip(np.asarray(arenas).tolist(), obstacles, strict=True):
-                ox, oy = self.offsets[arena]
-                for shape, (x, y, radius) in zip(self._obstacle_shapes[arena], rows, strict=True):
-                    shape.unsafe_set_offset((ox + x, oy + y))
-                    shape.unsafe_set_radius(radius)
-                    self.space.reindex_shape(shape)
+            self._place_obstacles(np.asarray(arenas), obstacles)
+
+    def _place_obstacles(self, arenas: np.ndarray, obstacles: np.ndarray) -> None:
+        self.obstacles[arenas] = obstacles
+        for arena, rows in zip(arenas.tolist(), obstacles, strict=True):
+            ox, oy = self.offsets[arena]
+            for shape, (x, y, radius) in zip(self._obstacle_shapes[arena], rows, strict=True):
+                shape.unsafe_set_offset((ox + x, oy + y))
+                shape.unsafe_set_radius(radius)
+                self.space.reindex_shape(shape)
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything of ours the next step depends on, and pymunk's bodies as pymunk holds them
+        (absolute positions: relative ones plus the arena's offset need not give back the same
+        bits). Not pymunk's contact caches: a contact under way at a restore may resolve in
+        other last bits (:meth:`restore`)."""
+        self._read_buffer.clear()
+        pymunk.batch.get_space_bodies(self.space, _POSITION_VELOCITY, self._read_buffer)
+        bodies = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
+        return {
+            "positions": self.positions.copy(),
+            "velocities": self.velocities.copy(),
+            "obstacles": self.obstacles.copy(),
+            "bodies": bodies.copy(),
+            "moved": self._moved,
+        }
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Put back a :meth:`snapshot`: pymunk's bodies exactly, our arrays, the obstacles."""
+        if len(self._obstacle_shapes[0]):
+            self._place_obstacles(np.arange(self.num_arenas), np.array(state["obstacles"], dtype=np.float64))
+        self._state[:-1] = np.array(state["bodies"], dtype=np.float64)
+        pymunk.batch.set_space_bodies(self.space, _POSITION_VELOCITY, self._state_buffer)
+        self.positions = np.array(state["positions"], dtype=np.float64)
+        self.velocities = np.array(state["velocities"], dtype=np.float64)
+        self._moved = bool(state["moved"])
 
     def _write(self, velocities: np.ndarray) -> None:
         """Give pymunk the velocities for this step, and the positions too if we moved disks

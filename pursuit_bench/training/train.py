@@ -18,11 +18,13 @@ The CLI parses options into a :class:`TrainConfig` and calls :class:`Trainer`.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import torch
 
 from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
 from pursuit_bench.agents.dqn import DQNLearner
@@ -30,7 +32,7 @@ from pursuit_bench.agents.kinds import KINDS, HierarchicalPredator, LearningAgen
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
-from pursuit_bench.training.recording import EpisodeTraces, Recorder
+from pursuit_bench.training.recording import EpisodeTrace, EpisodeTraces, Recorder
 from pursuit_bench.training.train_config import (
     TrainConfig as TrainConfig,  # the configuration lives apart: no torch there
 )
@@ -152,6 +154,7 @@ class Run:
         self.episodes_done = 0
         self.env_steps = 0
         self.last_losses: dict[str, float] = {}
+        self.pending: list[EpisodeRecord] = []  # episodes ended beyond the budget, reported if it grows
         self.obs, _ = self.env.reset(seed=config.seed)
         self.chase_steps = np.zeros((config.num_envs, self.n_predators))
         core = self.env.core
@@ -184,25 +187,32 @@ class Run:
         if self.traces is not None:
             world = self.env.core.world
             trace = self.traces.finish(arena, truncated, world.positions[arena], world.obstacles[arena])
-        if self.finished:
-            return  # arenas finishing beyond the budget are not counted
-        self.episodes_done += 1
         extra: dict[str, float] = {f"loss/{a}": loss for a, loss in self.last_losses.items()}
         if self.learner is not None:
             extra.update({"epsilon": self.learner.epsilon, "beta": self.learner.beta})
         record = EpisodeRecord(
-            episode=self.episodes_done,
+            episode=0,  # numbered when reported
             length=length,
             captured=bool(info["captured"][arena]),
             returns={a: float(r) for a, r in zip(self.names, info["episode_return"][arena], strict=True)},
             chase_fraction={a: float(c) for a, c in zip(self.names[:-1], chase, strict=True)},
             extra=extra,
         )
-        if self.recorder is not None and trace is not None:
-            if self.episodes_done == 1 or self.episodes_done % self.record_every == 0:
+        if self.finished:  # beyond the budget: not counted, kept for a resume that extends it
+            self.pending.append(record)
+            return
+        self._report(record, trace)
+
+    def _report(self, record: EpisodeRecord, trace: EpisodeTrace | None) -> None:
+        """Count a finished episode and tell the recorder and ``on_episode`` of it."""
+        self.episodes_done += 1
+        record = dataclasses.replace(record, episode=self.episodes_done)
+        if self.recorder is not None:
+            recorded = self.episodes_done == 1 or self.episodes_done % self.record_every == 0
+            if recorded and trace is not None:
                 self.recorder.log_episode(self.episodes_done, trace)
             metrics = {f"return/{a}": r for a, r in record.returns.items()}
-            metrics.update({"length": float(length), "captured": float(record.captured), **extra})
+            metrics.update({"length": float(record.length), "captured": float(record.captured), **record.extra})
             metrics.update({f"chase_fraction/{a}": f for a, f in record.chase_fraction.items()})
             self.recorder.log_metrics(self.episodes_done, metrics)
         if self.on_episode is not None:
@@ -210,8 +220,15 @@ class Run:
 
     def state_dict(self) -> dict[str, Any]:
         """The run's checkpoint. A finished run stops stepping and leaves its learners with its
-        members' final state (:meth:`Trainer._drop_finished`), so this stays as it finished."""
+        members' final state (:meth:`Trainer._drop_finished`), so this stays as it finished.
+        It holds the arenas mid-episode too (``arenas``: the env's state, the last observations,
+        the chase counts), the last losses and the episodes ended beyond the budget, so that a
+        resumed run goes on exactly as one that never stopped."""
+        arenas = {"env": self.env.state_dict(), "obs": self.obs, "chase_steps": self.chase_steps}
         return {
+            "arenas": _as_tensors(arenas),
+            "last_losses": dict(self.last_losses),
+            "pending": [dataclasses.asdict(record) for record in self.pending],
             "episodes_done": self.episodes_done,
             "env_steps": self.env_steps,
             "recording_clock": self.recorder.clock if self.recorder is not None else 0,
@@ -224,15 +241,55 @@ class Run:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore :meth:`state_dict`: the arenas go on where they were (a checkpoint written
+        before they were saved restarts them, from a seed derived from the run's seed and the
+        episode count); the episodes that ended beyond the old budget are reported first."""
         load_agents_state(self.agents, state, self.config.condition)
         self.episodes_done, self.env_steps = int(state["episodes_done"]), int(state["env_steps"])
-        self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
-        self.chase_steps[:] = 0.0
+        if "arenas" in state:
+            arenas = _as_arrays(state["arenas"])
+            self.env.load_state_dict(arenas["env"])
+            self.obs, self.chase_steps = arenas["obs"], arenas["chase_steps"]
+            self.last_losses = {a: float(v) for a, v in state["last_losses"].items()}
+        else:
+            self.obs, _ = self.env.reset(seed=self.config.seed + 1_000_003 * self.episodes_done)
+            self.chase_steps[:] = 0.0
         if self.traces is not None:
             core = self.env.core
             self.traces = EpisodeTraces(core.world.positions, core.config.max_steps, core.obstacles)
         if self.recorder is not None:  # a resumed piece of the recording plays on after the last
             self.recorder.clock = max(self.recorder.clock, int(state.get("recording_clock", 0)))
+        pending = [EpisodeRecord(**record) for record in state.get("pending", [])]
+        self.pending = []
+        for record in pending:
+            if self.finished:
+                self.pending.append(record)
+            else:
+                self._report(record, None)
+
+
+def _as_tensors(value: Any) -> Any:
+    """numpy arrays as torch tensors, all the way down: what a checkpoint read with
+    ``weights_only`` holds (``_as_arrays`` turns them back)."""
+    if isinstance(value, np.ndarray):
+        return torch.from_numpy(value.copy())
+    if isinstance(value, dict):
+        return {k: _as_tensors(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_as_tensors(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _as_arrays(value: Any) -> Any:
+    if isinstance(value, torch.Tensor):
+        return value.numpy()
+    if isinstance(value, dict):
+        return {k: _as_arrays(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_as_arrays(v) for v in value]
+    return value
 
 
 def _per_run(value: Any, k: int, what: str) -> list[Any]:
@@ -303,11 +360,10 @@ class Trainer:
         return self.runs[run].state_dict()
 
     def load_state_dict(self, state: dict[str, Any], run: int = 0) -> None:
-        """Restore run ``run`` from :meth:`state_dict`. Episodes under way when it was taken are
-        not resumed: every arena starts afresh, from a seed derived from the run's seed and the
-        episode count. Runs stacked together move in lockstep: all must be restored from the
-        same number of env steps (ValueError otherwise, once all are loaded: see
-        :meth:`check_lockstep`)."""
+        """Restore run ``run`` from :meth:`state_dict`: the episodes under way when it was taken
+        go on where they were (:meth:`Run.load_state_dict`). Runs stacked together move in
+        lockstep: all must be restored from the same number of env steps (ValueError otherwise,
+        once all are loaded: see :meth:`check_lockstep`)."""
         self.runs[run].load_state_dict(state)
 
     def check_lockstep(self) -> None:
