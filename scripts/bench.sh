@@ -13,3 +13,4 @@ pip=(.venv-bench/bin/python -m pip install -q --disable-pip-version-check)
 .venv-bench/bin/python benchmarks/bench_train.py
 .venv-bench/bin/python benchmarks/bench_recording.py
 .venv/bin/python benchmarks/bench_perturb.py
+.venv/bin/python benchmarks/bench_mkl.py

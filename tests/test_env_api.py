@@ -2,6 +2,7 @@
 
 import hashlib
 import importlib
+import os
 import re
 import subprocess
 import sys
@@ -209,3 +210,12 @@ def test_every_name_the_readme_gives_in_the_package_exists() -> None:
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+def test_importing_the_package_pins_mkls_code_path_unless_set() -> None:
+    code = "import os, pursuit_bench, torch; torch.ones(3, 3) @ torch.ones(3, 3); print(os.environ['MKL_CBWR'])"
+    env = {k: v for k, v in os.environ.items() if k != "MKL_CBWR"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert done.returncode == 0 and done.stdout.split() == ["AVX2"], done.stderr
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**env, "MKL_CBWR": "AUTO"})
+    assert done.returncode == 0 and done.stdout.split() == ["AUTO"], done.stderr
