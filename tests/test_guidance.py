@@ -40,6 +40,8 @@ def test_synthetic_attacks_are_recovered(true: TrueLaw, identified: bool) -> Non
         selection = guidance.select(*attack(true, seed), DT)
         chosen.append(selection.chosen.law)
         own.append(selection.fits[true.law])
+        held = min(selection.fits["pp"].error, selection.fits["pn"].error)
+        assert selection.fits["mixed"].error <= held + 1e-12  # it holds both: never fits worse
     if identified:
         assert sum(c == true.law for c in chosen) >= 4, chosen
     else:  # the law or a single law it holds, never one it does not

@@ -343,9 +343,12 @@ def _grid(law: str, attack: _Attack, max_delay: int) -> np.ndarray:
     return np.stack([m.ravel() for m in mesh], axis=1)
 
 
-def _fit_values(law: str, attack: _Attack, max_delay: int) -> tuple[np.ndarray, float]:
+def _fit_values(
+    law: str, attack: _Attack, max_delay: int, extra: tuple[np.ndarray, ...] = ()
+) -> tuple[np.ndarray, float]:
     """The best candidate (N, K, φ₀, delay) and its sum of squared errors: a coarse grid, then,
-    for the best candidate of each delay, grids that halve around it round by round."""
+    for the best candidate of each delay (and each of ``extra``: for the mixed law, the best
+    fits of the laws it holds), grids that halve around it round by round."""
     names = LAW_GAINS[law]
     free = [c for c, n in ((0, "N"), (1, "K")) if n in names] + ([2] if law != "parallel" else [])
     low = np.array([GAIN_BOUNDS["N"][0], GAIN_BOUNDS["K"][0], attack.first_heading - HEADING_RANGE])
@@ -364,6 +367,10 @@ def _fit_values(law: str, attack: _Attack, max_delay: int) -> tuple[np.ndarray, 
             if len(chosen):
                 best.append(candidates[chosen[np.argmin(errors[chosen])]].copy())
                 best_errors.append(float(errors[chosen].min()))
+    if extra:
+        starts = np.stack(extra)
+        best += list(starts)
+        best_errors += [float(e) for e in _square_errors(_run(law, starts, attack), attack)]
     if free:
         offsets = np.stack([m.ravel() for m in np.meshgrid(*[np.linspace(-1, 1, 5)] * len(free), indexing="ij")], 1)
         for _ in range(_ZOOM_ROUNDS):
@@ -439,14 +446,20 @@ def fit(
         raise ValueError(f"max_delay={max_delay!r}: expected a number of samples >= 0")
     start = _checked_start(start, int(max_delay), len(pursuer))
     attack = _attack(pursuer, target, dt, start)
-    values, square_error = _fit_values(law, attack, int(max_delay))
-    samples = len(pursuer) - 1 - start
+    held = tuple(_fit_values(single, attack, int(max_delay))[0] for single in ("pp", "pn")) if law == "mixed" else ()
+    return _law_fit(law, attack, int(max_delay), held)
+
+
+def _law_fit(law: str, attack: _Attack, max_delay: int, extra: tuple[np.ndarray, ...] = ()) -> LawFit:
+    values, square_error = _fit_values(law, attack, max_delay, extra)
+    dt, start = attack.dt, attack.start
+    samples = len(attack.pursuer) - 1 - start
     return LawFit(
         law=law,
         gains={n: float(values[0 if n == "N" else 1]) for n in LAW_GAINS[law]},
         delay=float(round(values[3]) * dt),
         heading=float(values[2]),
-        censored=_censored(law, values, int(max_delay)),
+        censored=_censored(law, values, max_delay),
         error=float(np.sqrt(square_error / samples)),
         criterion=_criterion(square_error, samples, law, _floor(attack)),
         samples=samples,
@@ -468,8 +481,24 @@ def select(
     unknown = [law for law in laws if law not in LAWS]
     if unknown:
         raise ValueError(f"laws {unknown}: expected some of {', '.join(LAWS)}")
-    fits = {law: fit(pursuer, target, dt, law, max_delay, start) for law in dict.fromkeys(("none", *laws))}
-    return Selection(min(fits.values(), key=lambda f: f.criterion), fits)
+    if "mixed" in laws:  # the mixed fit starts from the fits of the laws it holds too
+        laws = (*(law for law in laws if law != "mixed"), "pp", "pn", "mixed")
+    pursuer, target = _checked(pursuer, target, dt)
+    if not (isinstance(max_delay, (int, np.integer)) and max_delay >= 0):
+        raise ValueError(f"max_delay={max_delay!r}: expected a number of samples >= 0")
+    attack = _attack(pursuer, target, dt, _checked_start(start, int(max_delay), len(pursuer)))
+    fits: dict[str, LawFit] = {}
+    for law in dict.fromkeys(("none", *laws)):
+        held = tuple(_values(fits[single], attack) for single in ("pp", "pn")) if law == "mixed" else ()
+        fits[law] = _law_fit(law, attack, int(max_delay), held)
+    ordered = {law: fits[law] for law in LAWS if law in fits}
+    return Selection(min(ordered.values(), key=lambda f: f.criterion), ordered)
+
+
+def _values(fitted: LawFit, attack: _Attack) -> np.ndarray:
+    """A fit as the simulation's candidate row (N, K, φ₀, delay in samples)."""
+    delay = round(fitted.delay / attack.dt)
+    return np.array([fitted.gains.get("N", 0.0), fitted.gains.get("K", 0.0), fitted.heading, delay])
 
 
 def profile(

@@ -4,12 +4,13 @@ criterion, summaries per predator kind and phase; what ``pursuit-bench law`` wri
 (``law.json``, ``law.png``).
 
 **Attacks.** Every predator of the env has modes (its action carries one: chase or stalk). A
-*phase* is a run of steps in one mode, other-mode interruptions of at most :data:`GAP` steps
+*phase* is a run of steps in one mode, stalking for at most :data:`GAP` steps inside a chase
 bridged; a *chase phase* is an attack, from its onset to its end (capture, the episode's end, or
 the return to stalking), and the stalking phases are fitted separately. Scripted predators hold
 one mode, so their one phase is the whole episode. Each segment carries up to ``max_delay``
 samples before its onset (the history a delayed law reads); it is kept when its onset is
-followed by at least :data:`MIN_STEPS` samples (1 s) and the predator moves.
+followed by at least :data:`MIN_STEPS` samples (0.6 s) and the predator moves; stalking
+phases are cut into pieces of at most :data:`STALK_PIECE` samples.
 
 Episodes are played as the paper evaluates (predators greedy, the prey ε = 0.1); the scripted
 predators (always-chase, which is the hierarchical predator's lower layer alone in chase mode,

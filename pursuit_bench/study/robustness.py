@@ -10,6 +10,7 @@ averaged over the condition's predators. Over seeds it gets a t-interval
 
 from __future__ import annotations
 
+import concurrent.futures
 import json
 import multiprocessing
 from collections.abc import Callable
@@ -169,10 +170,11 @@ def run(
     if workers == 1 or len(todo) <= 1:
         for job in todo:
             keep(*_job(job))
-    elif todo:
-        with multiprocessing.get_context("spawn").Pool(min(workers, len(todo))) as pool:
-            for key, result in pool.imap_unordered(_job, todo):
-                keep(key, result)
+    elif todo:  # a pool that notices a worker dying (BrokenProcessPool) rather than waiting on it
+        context = multiprocessing.get_context("spawn")
+        with concurrent.futures.ProcessPoolExecutor(min(workers, len(todo)), mp_context=context) as pool:
+            for future in concurrent.futures.as_completed([pool.submit(_job, job) for job in todo]):
+                keep(*future.result())
     return summarise(sources, done, episodes, seed)
 
 
