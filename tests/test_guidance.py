@@ -87,8 +87,8 @@ def naive_simulation(law, n_gain, k_gain, delay_steps, heading0, pursuer, target
         elif law == "none":
             heading[u] = heading[u - 1]
         else:
-            i = max(u - 1 - lag, 1)
-            rate = np.angle(np.exp(1j * (los[i] - los[i - 1]))) / h
+            i = max(u - 1 - lag, 0)
+            rate = np.angle(np.exp(1j * (los[i] - los[i - 1]))) / h if i > 0 else 0.0
             deviation = np.angle(np.exp(1j * (los[i] - heading[i])))
             heading[u] = heading[u - 1] + h * (n_gain * rate + k_gain * deviation)
         moving = heading[u] + 0.5 * (heading[u] - heading[u - 1]) if u > first else heading[u]
@@ -152,7 +152,10 @@ def test_the_hierarchical_predators_chases_are_found_to_navigate_in_parallel() -
         assert fits["attacks"] >= 8 and fits["winner"] in ("parallel", "pn"), fits["share"]
         assert fits["share"]["parallel"] + fits["share"]["pn"] >= 0.8, fits["share"]
         n_gain = fits["laws"]["pn"]["summary"]["N"]
-        assert n_gain["upper"] > 0.2 and (n_gain["median"] is None or n_gain["median"] > 5), n_gain
+        # the median over every fit, one at the bound counted at it (its value is at least that)
+        pn = fits["laws"]["pn"]
+        at_least = [15.0 if c.get("N") == "upper" else v for v, c in zip(pn["gains"]["N"], pn["censored"], strict=True)]
+        assert n_gain["upper"] > 0.2 and np.median(at_least) > 5, n_gain
 
 
 def test_phases_bridge_short_interruptions() -> None:

@@ -150,6 +150,14 @@ def _checked_start(start: int | None, max_delay: int, length: int) -> int:
     return int(start)
 
 
+def _prepared(pursuer: np.ndarray, target: np.ndarray, dt: float, max_delay: int, start: int | None) -> _Attack:
+    """The checked attack at sub-step resolution, for :func:`fit` and :func:`select`."""
+    pursuer, target = _checked(pursuer, target, dt)
+    if not (isinstance(max_delay, (int, np.integer)) and max_delay >= 0):
+        raise ValueError(f"max_delay={max_delay!r}: expected a number of samples >= 0")
+    return _attack(pursuer, target, dt, _checked_start(start, int(max_delay), len(pursuer)))
+
+
 def _delay_steps(delay: float, dt: float) -> int:
     steps = round(delay / dt)
     if delay < 0 or abs(steps * dt - delay) > 1e-6 * max(dt, 1.0):
@@ -243,8 +251,8 @@ def _simulate_kernel(
             elif law == 0:
                 heading[u] = heading[u - 1]
             else:  # the turn over sub-step u-1 → u acts on the state lag sub-steps before u-1
-                i = max(u - 1 - lag[g], 1)
-                rate = (los[i] - los[i - 1] + np.pi) % (2 * np.pi) - np.pi
+                i = max(u - 1 - lag[g], 0)  # before the first sample: its state, the line of sight still
+                rate = (los[i] - los[i - 1] + np.pi) % (2 * np.pi) - np.pi if i > 0 else 0.0
                 deviation = (los[i] - heading[i] + np.pi) % (2 * np.pi) - np.pi
                 heading[u] = heading[u - 1] + h * (n_gain[g] * rate / h + k_gain[g] * deviation)
             # over the sub-step the heading keeps turning: move at its extrapolated midpoint
@@ -282,8 +290,19 @@ def _run(law: str, values: np.ndarray, attack: _Attack) -> np.ndarray:
 
 
 def _square_errors(simulated: np.ndarray, attack: _Attack) -> np.ndarray:
-    residual = simulated[..., attack.start + 1 :, :] - attack.pursuer[attack.start + 1 :]
-    return (residual**2).sum(axis=(-1, -2))
+    """Each candidate's (G, T, 2) summed squared distance after ``start``, in one fixed order (numpy's
+    vectorised sums round by the memory's alignment, which varies from run to run, and the fit
+    picks among near-ties)."""
+    return _square_errors_kernel(simulated, attack.pursuer, attack.start)
+
+
+@numba.njit(cache=True)
+def _square_errors_kernel(simulated: np.ndarray, measured: np.ndarray, start: int) -> np.ndarray:
+    total = np.zeros(len(simulated))
+    for g in range(len(simulated)):
+        for t in range(start + 1, len(measured)):
+            total[g] += (simulated[g, t, 0] - measured[t, 0]) ** 2 + (simulated[g, t, 1] - measured[t, 1]) ** 2
+    return total
 
 
 def _gain_values(law: str, gains: dict[str, float]) -> tuple[float, float]:
@@ -439,13 +458,9 @@ def fit(
     samples before it are the history the delayed laws read); delays of 0 … ``max_delay``
     samples are tried, all from the same start. ValueError for too short or degenerate input
     (fewer than 4 simulated steps, a pursuer that does not move, NaNs)."""
-    pursuer, target = _checked(pursuer, target, dt)
     if law not in LAWS:
         raise ValueError(f"law={law!r}: expected one of {', '.join(LAWS)}")
-    if not (isinstance(max_delay, (int, np.integer)) and max_delay >= 0):
-        raise ValueError(f"max_delay={max_delay!r}: expected a number of samples >= 0")
-    start = _checked_start(start, int(max_delay), len(pursuer))
-    attack = _attack(pursuer, target, dt, start)
+    attack = _prepared(pursuer, target, dt, max_delay, start)
     held = tuple(_fit_values(single, attack, int(max_delay))[0] for single in ("pp", "pn")) if law == "mixed" else ()
     return _law_fit(law, attack, int(max_delay), held)
 
@@ -483,10 +498,7 @@ def select(
         raise ValueError(f"laws {unknown}: expected some of {', '.join(LAWS)}")
     if "mixed" in laws:  # the mixed fit starts from the fits of the laws it holds too
         laws = (*(law for law in laws if law != "mixed"), "pp", "pn", "mixed")
-    pursuer, target = _checked(pursuer, target, dt)
-    if not (isinstance(max_delay, (int, np.integer)) and max_delay >= 0):
-        raise ValueError(f"max_delay={max_delay!r}: expected a number of samples >= 0")
-    attack = _attack(pursuer, target, dt, _checked_start(start, int(max_delay), len(pursuer)))
+    attack = _prepared(pursuer, target, dt, max_delay, start)
     fits: dict[str, LawFit] = {}
     for law in dict.fromkeys(("none", *laws)):
         held = tuple(_values(fits[single], attack) for single in ("pp", "pn")) if law == "mixed" else ()

@@ -170,15 +170,24 @@ def _gain_summary(values: list[float], sides: list[str | None], seed: int) -> di
     return summary
 
 
-def fit_segments(found: list[Segment], seed: int = 0) -> dict[str, Any]:
-    """Every law fitted to every segment and one chosen (:func:`guidance.select`), per phase:
-    each attack's chosen law, every law's gains (with the bound they sit at, if any), delay,
-    error, error relative to ``"none"`` and criterion; over attacks, how often each law is
-    chosen and the gains' summaries (:func:`_gain_summary`)."""
+def select(found: list[Segment]) -> list[guidance.Selection]:
+    """Every law fitted to each segment and one chosen (:func:`guidance.select`)."""
+    return [guidance.select(s.pursuer, s.target, DT, MAX_DELAY, s.start) for s in found]
+
+
+def fit_segments(
+    found: list[Segment], seed: int = 0, selections: list[guidance.Selection] | None = None
+) -> dict[str, Any]:
+    """Per phase, from each segment's :func:`select` (``selections``, in ``found``'s order, or
+    made here): each attack's chosen law, every law's gains (with the bound they sit at, if
+    any), delay, error, error relative to ``"none"`` and criterion; over attacks, how often
+    each law is chosen and the gains' summaries (:func:`_gain_summary`)."""
+    every = select(found) if selections is None else selections
     result: dict[str, Any] = {}
     for phase in PHASES:
-        chosen_here = [s for s in found if s.phase == phase]
-        selections = [guidance.select(s.pursuer, s.target, DT, MAX_DELAY, s.start) for s in chosen_here]
+        here = [k for k, s in enumerate(found) if s.phase == phase]
+        chosen_here = [found[k] for k in here]
+        selections = [every[k] for k in here]
         entry: dict[str, Any] = {
             "attacks": len(selections),
             "chosen": [sel.chosen.law for sel in selections],
@@ -213,12 +222,12 @@ def fit_segments(found: list[Segment], seed: int = 0) -> dict[str, Any]:
     return result
 
 
-def examples(found: list[Segment], count: int = 3) -> list[dict[str, Any]]:
-    """A few attacks (chase phases first) with each law's simulated trajectory, for the figure."""
-    ordered = sorted(found, key=lambda s: (s.phase != "chase", s.episode))[:count]
+def examples(found: list[Segment], selections: list[guidance.Selection], count: int = 3) -> list[dict[str, Any]]:
+    """A few attacks (chase phases first) with each law's simulated trajectory (from their
+    ``selections``, in ``found``'s order), for the figure."""
+    ordered = sorted(range(len(found)), key=lambda k: (found[k].phase != "chase", found[k].episode))[:count]
     shown = []
-    for s in ordered:
-        selection = guidance.select(s.pursuer, s.target, DT, MAX_DELAY, s.start)
+    for s, selection in ((found[k], selections[k]) for k in ordered):
         shown.append(
             {
                 "phase": s.phase,
@@ -263,8 +272,9 @@ def analyse(
         "kinds": {},
     }
     found = attacks(condition, agents, episodes, seed, task_options=task_options)
-    result["kinds"][kind] = {name: fit_segments(found[name], seed) for name in predators}
-    result["examples"] = {kind: examples(found[predators[0]])}
+    selections = {name: select(found[name]) for name in predators}
+    result["kinds"][kind] = {name: fit_segments(found[name], seed, selections[name]) for name in predators}
+    result["examples"] = {kind: examples(found[predators[0]], selections[predators[0]])}
     if references:
         for name, policy in REFERENCES.items():
             scripted = {**agents, **{p: ScriptedAgent(p, policy(avoidance=avoidance)) for p in predators}}
