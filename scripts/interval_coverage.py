@@ -1,7 +1,8 @@
 """How often a 95 % interval over seeds holds the true mean: the t-interval the reports use
 (``pursuit_bench.study.statistics.coverage``) beside the percentile bootstrap they used before, on
-normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each. Prints the table
-docs/statistics.md quotes (seeded: the same table every time), then how skewed the seed-level
+normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each; and the median's
+interval the pursuit-law fits give over attacks, at 3–20 values. Prints the tables
+docs/statistics.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
 differences of results/reproduction are beside the simulated data, by the same measure.
 
     python scripts/interval_coverage.py
@@ -46,6 +47,17 @@ def percentile_bootstrap_coverage(draw, truth: float, n: int, seed: int) -> floa
     return held / DRAWS
 
 
+def median_coverage(sigma: float, n: int, draws: int = 1000) -> float:
+    """How often :func:`statistics.median_interval` holds the true median of lognormal data
+    (skewed, as fitted gains are) from ``n`` values; ``draws`` simulated sets."""
+    rng = np.random.default_rng(n)
+    held = 0
+    for k in range(draws):
+        interval = statistics.median_interval(rng.lognormal(0.0, sigma, n), seed=k, minimum=1)
+        held += interval is not None and interval[0] <= 1.0 <= interval[1]
+    return held / draws
+
+
 def pooled_skewness(groups: np.ndarray | list[np.ndarray]) -> float:
     """The sample skewness of values standardised within their group (a comparison's seeds)."""
     z = [(g - g.mean()) / g.std(ddof=1) for g in map(np.asarray, groups)]
@@ -62,6 +74,11 @@ def main() -> None:
             print(f"| {label} | {n} | {t:.1%} | {bootstrap:.1%} |")
     table = report.panel_table(report.collect(ROOT / "results" / "reproduction"))
     ours = [np.array(c["differences"]) for t in table for c in t.get("paired", {}).values()]
+    print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (statistics.median_interval) |")
+    print("|---:|---:|---:|")
+    for sigma in (0.3, 0.6):
+        for n in (3, 5, 10, 20):
+            print(f"| {sigma} | {n} | {median_coverage(sigma, n):.1%} |")
     n, rng = len(ours[0]), np.random.default_rng(0)
     print(f"\nseed-level differences of results/reproduction ({len(ours)} comparisons of {n} seeds):")
     print(f"pooled skewness {pooled_skewness(ours):+.2f}; the same measure on as many simulated groups:")

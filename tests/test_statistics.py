@@ -138,3 +138,12 @@ def test_the_slope_test_tells_a_trend_from_a_plateau() -> None:
     assert statistics.slope_test(flat, x, tolerance=0.004)["verdict"] == "flat"
     unresolved = statistics.slope_test(noisy, x, tolerance=0.004)
     assert unresolved["verdict"] == "not resolved" and unresolved["detectable"] > 0.004
+
+
+def test_the_median_interval_needs_five_values_and_holds_the_median() -> None:
+    assert statistics.median_interval([1.0, 2.0, 3.0, 4.0], seed=0) is None
+    assert statistics.median_interval([2.0] * 8, seed=0) is None
+    values = np.random.default_rng(0).lognormal(0.0, 0.5, 20)
+    low, high = statistics.median_interval(values, seed=0)  # type: ignore[misc]
+    assert low < np.median(values) < high
+    assert statistics.median_interval(values, seed=0) == [low, high]  # seeded: the same every time

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from pursuit_bench.agents.kinds import ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
@@ -152,21 +151,17 @@ def attacks(
 
 
 def _gain_summary(values: list[float], sides: list[str | None], seed: int) -> dict[str, Any]:
-    """Over attacks: the median of the interior fits with a 95 % bootstrap interval (scipy's
-    BCa over attacks, none below 3 interior fits) and the fraction at each bound."""
+    """Over attacks: the median of the interior fits with its 95 % interval
+    (:func:`statistics.median_interval`) and the fraction at each bound."""
     interior = np.array([v for v, s in zip(values, sides, strict=True) if s is None])
     count = max(len(values), 1)
     summary: dict[str, Any] = {
         "median": float(np.median(interior)) if len(interior) else None,
-        "ci": None,
+        "ci": statistics.median_interval(interior, seed),
         "interior": len(interior),
         "lower": sum(s == "lower" for s in sides) / count,
         "upper": sum(s == "upper" for s in sides) / count,
     }
-    if len(interior) >= 3 and np.ptp(interior) > 0:
-        rng = np.random.default_rng(seed)
-        interval = stats.bootstrap((interior,), np.median, n_resamples=2000, method="percentile", random_state=rng)
-        summary["ci"] = [float(interval.confidence_interval.low), float(interval.confidence_interval.high)]
     return summary
 
 
