@@ -19,6 +19,7 @@ import torch.nn.functional as F
 
 from pursuit_bench.agents.adam import FlatAdam
 from pursuit_bench.agents.config import AgentConfig
+from pursuit_bench.agents.fused import flatten_parameters, parameter_offsets, q_and_value_kernel, update_kernel
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, ReplayStack
 
@@ -79,6 +80,8 @@ class DQNLearner:
         self.target.load_state_dict(self.online.state_dict())  # starts as a copy (departure)
         self.target.requires_grad_(False)
         self.optimizer = FlatAdam(self.online, lr=config.learning_rate)
+        self._target_flat = flatten_parameters(self.target)  # what the compiled update reads
+        self._offsets = parameter_offsets(self.online)
         self.replay = ReplayStack(
             members,
             config.buffer_size,
@@ -160,14 +163,36 @@ class DQNLearner:
 
     def learn(self, batch: Batch) -> np.ndarray:
         """One gradient step on a batch with the member axis first (M, B, …), then its new
-        priorities."""
-        losses, td = self.loss(batch)
-        self.optimizer.zero_grad()
-        losses.sum().backward()
+        priorities: the gradient of :meth:`loss` summed over the members, from the compiled
+        update of :mod:`pursuit_bench.agents.fused` (autograd's numbers to float rounding)."""
+        losses, td = update_kernel(
+            self.optimizer.flat.numpy(),
+            self._target_flat.numpy(),
+            self.optimizer.grad.numpy(),
+            self._offsets,
+            self.n_actions,
+            np.ascontiguousarray(batch.obs, dtype=np.float32),
+            np.ascontiguousarray(batch.next_obs, dtype=np.float32),
+            np.ascontiguousarray(batch.actions, dtype=np.int64),
+            np.ascontiguousarray(batch.rewards, dtype=np.float32),
+            np.ascontiguousarray(batch.terminated, dtype=np.float32),
+            np.ascontiguousarray(batch.weights, dtype=np.float32),
+            self.config.gamma,
+            self.config.huber_delta,
+            self.config.wall_features,
+        )
         self.optimizer.step()
-        self.replay.update_priorities(batch.indices, td.detach().numpy())
+        self.replay.update_priorities(batch.indices, td)
         self.updates += 1
-        return losses.detach().numpy()
+        return losses
+
+    def act_values(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Q-values (M, B, A) and V(s) (M, B) for observations (M, B, n_obs) by the compiled
+        forward pass the training loop acts with: :meth:`evaluate`'s to float rounding (the
+        evaluations use that one, torch's, whose numbers the committed results hold)."""
+        flat = self.optimizer.flat.numpy()
+        obs = np.ascontiguousarray(obs, dtype=np.float32)
+        return q_and_value_kernel(flat, self._offsets, self.n_actions, obs, self.config.wall_features)
 
     def loss(self, batch: Batch) -> tuple[torch.Tensor, torch.Tensor]:
         """Per-member losses (M,) and TD errors (M, B): the Huber loss of ``Q(s, a) - y``

@@ -388,7 +388,7 @@ class Trainer:
         decided = []
         for group in self.groups:  # one forward pass per group, all its runs at once
             obs = np.stack([self.runs[r].obs[:, i] for r, i in zip(group.runs, group.indices, strict=True)])
-            q, v = group.learner.evaluate(obs)
+            q, v = group.learner.act_values(obs)
             chosen = group.learner.choose(q, explore=True)
             decided.append((obs, chosen))
             for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):

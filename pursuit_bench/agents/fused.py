@@ -1,0 +1,251 @@
+"""The double-DQN update of every member of a stacked dueling network in one compiled call.
+
+For networks this small (``in → 64 → 64``, heads of 32) an update is about three million
+multiply-adds per member: what cost was the number of calls (autograd records some sixty nodes
+an update, each a tensor operation of a few microseconds), not the arithmetic. Here one numba
+kernel holds a member's whole update: the online network's forward pass on ``s`` and ``s'``
+together, the target network's on ``s'``, the double-DQN target, the importance-weighted Huber
+loss, and the backward pass written out by the chain rule, its matrix products by BLAS
+(``np.dot``), everything else in plain loops. It loops over the members, so a member's update
+never depends on how many are stacked beside it or where it sits. Adam then steps on the flat
+gradient buffer the kernel wrote (:class:`~pursuit_bench.agents.adam.FlatAdam`).
+
+The parameters are read from the flat buffers the learner keeps (:func:`flatten_parameters`):
+parameter ``i`` of member ``m`` is the block ``offsets[i] + m · size_i`` of ``size_i`` numbers,
+row-major ``(in, out)`` as :class:`~pursuit_bench.agents.network.StackedLinear` holds it.
+
+The arithmetic is autograd's, in another order: losses and gradients equal
+``DQNLearner.loss(batch).sum().backward()`` to float rounding, not bit for bit
+(``tests/test_fused.py``); docs/departures.md says so.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import torch
+from torch import nn
+
+#: The widths of the network's layers (docs/spec.md, the agents), as in ``network.py``.
+from pursuit_bench.agents.network import HEAD, TRUNK
+
+
+def flatten_parameters(module: nn.Module) -> torch.Tensor:
+    """Rebind every parameter of ``module`` as a view of one flat tensor, in
+    ``module.parameters()`` order, and return it: a copy into the module's parameters (e.g.
+    ``load_state_dict``) lands in the flat tensor, and the flat tensor is what the kernels read."""
+    params = list(module.parameters())
+    flat = torch.zeros(sum(p.numel() for p in params))
+    offset = 0
+    for p in params:
+        n = p.numel()
+        flat[offset : offset + n].copy_(p.detach().reshape(-1))
+        p.data = flat[offset : offset + n].view_as(p)
+        offset += n
+    return flat
+
+
+def parameter_offsets(module: nn.Module) -> np.ndarray:
+    """Where each parameter starts in :func:`flatten_parameters`'s buffer."""
+    sizes = [p.numel() for p in module.parameters()]
+    return np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+
+
+@numba.njit(cache=True)
+def _weights(flat, offsets, member, n_in, n_actions):
+    """Member ``member``'s twelve parameters as (in, out) and (out,) views of ``flat``."""
+    shapes = ((n_in, TRUNK[0]), (TRUNK[0], TRUNK[1]), (TRUNK[1], HEAD), (HEAD, 1), (TRUNK[1], HEAD), (HEAD, n_actions))
+    w1 = flat[offsets[0] + member * shapes[0][0] * shapes[0][1] :][: shapes[0][0] * shapes[0][1]]
+    b1 = flat[offsets[1] + member * shapes[0][1] :][: shapes[0][1]]
+    w2 = flat[offsets[2] + member * shapes[1][0] * shapes[1][1] :][: shapes[1][0] * shapes[1][1]]
+    b2 = flat[offsets[3] + member * shapes[1][1] :][: shapes[1][1]]
+    wv1 = flat[offsets[4] + member * shapes[2][0] * shapes[2][1] :][: shapes[2][0] * shapes[2][1]]
+    bv1 = flat[offsets[5] + member * shapes[2][1] :][: shapes[2][1]]
+    wv2 = flat[offsets[6] + member * shapes[3][0] :][: shapes[3][0]]
+    bv2 = flat[offsets[7] + member :][:1]
+    wa1 = flat[offsets[8] + member * shapes[4][0] * shapes[4][1] :][: shapes[4][0] * shapes[4][1]]
+    ba1 = flat[offsets[9] + member * shapes[4][1] :][: shapes[4][1]]
+    wa2 = flat[offsets[10] + member * shapes[5][0] * shapes[5][1] :][: shapes[5][0] * shapes[5][1]]
+    ba2 = flat[offsets[11] + member * shapes[5][1] :][: shapes[5][1]]
+    return (
+        w1.reshape(shapes[0]),
+        b1,
+        w2.reshape(shapes[1]),
+        b2,
+        wv1.reshape(shapes[2]),
+        bv1,
+        wv2,
+        bv2,
+        wa1.reshape(shapes[4]),
+        ba1,
+        wa2.reshape(shapes[5]),
+        ba2,
+    )
+
+
+@numba.njit(cache=True)
+def _inputs(obs, wall):
+    """What the network sees of observations (B, n_obs): a contiguous copy, with the wall features
+    ``(u, v)`` appended when ``wall`` (:func:`pursuit_bench.agents.dqn.wall_features`)."""
+    rows, n_obs = obs.shape
+    out = np.empty((rows, n_obs + (2 if wall else 0)), dtype=np.float32)
+    out[:, :n_obs] = obs
+    if wall:
+        for i in range(rows):
+            x, y = obs[i, 0], obs[i, 1]
+            dx, dy = obs[i, 4] - x, obs[i, 5] - y
+            norm = np.sqrt(dx * dx + dy * dy)
+            lx, ly = (dx / norm, dy / norm) if norm > 0 else (np.float32(1.0), np.float32(0.0))
+            out[i, n_obs] = x * lx + y * ly
+            out[i, n_obs + 1] = y * lx - x * ly
+    return out
+
+
+@numba.njit(cache=True)
+def _dense_relu(x, w, b):
+    """``relu(x @ w + b)``."""
+    out = np.dot(x, w)
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            value = out[i, j] + b[j]
+            out[i, j] = value if value > 0 else np.float32(0.0)
+    return out
+
+
+@numba.njit(cache=True)
+def _forward(x, p):
+    """Q-values (B, A), V(s) (B,) and the hidden layers of one member for inputs x (B, in)."""
+    w1, b1, w2, b2, wv1, bv1, wv2, bv2, wa1, ba1, wa2, ba2 = p
+    h1 = _dense_relu(x, w1, b1)
+    h2 = _dense_relu(h1, w2, b2)
+    hv = _dense_relu(h2, wv1, bv1)
+    ha = _dense_relu(h2, wa1, ba1)
+    advantage = np.dot(ha, wa2)
+    rows, n_actions = advantage.shape
+    value = np.empty(rows, dtype=np.float32)
+    q = np.empty_like(advantage)
+    for i in range(rows):
+        v = bv2[0]
+        for k in range(hv.shape[1]):
+            v += hv[i, k] * wv2[k]
+        value[i] = v
+        mean = np.float32(0.0)
+        for j in range(n_actions):
+            advantage[i, j] += ba2[j]
+            mean += advantage[i, j]
+        mean /= np.float32(n_actions)
+        for j in range(n_actions):
+            q[i, j] = v + advantage[i, j] - mean
+    return q, value, h1, h2, hv, ha
+
+
+@numba.njit(cache=True)
+def q_and_value_kernel(flat, offsets, n_actions, obs, wall):
+    """Q-values (M, B, A) and V(s) (M, B) of every member for observations (M, B, n_obs)."""
+    members, rows, n_obs = obs.shape
+    n_in = n_obs + (2 if wall else 0)
+    q = np.empty((members, rows, n_actions), dtype=np.float32)
+    value = np.empty((members, rows), dtype=np.float32)
+    for m in range(members):
+        q_m, v_m, _, _, _, _ = _forward(_inputs(obs[m], wall), _weights(flat, offsets, m, n_in, n_actions))
+        q[m] = q_m
+        value[m] = v_m
+    return q, value
+
+
+@numba.njit(cache=True)
+def _backward_dense(x, grad_out, w, grad_w, grad_b):
+    """Write ``x.T @ grad_out`` into grad_w and the column sums into grad_b; the input's gradient."""
+    grad_w[:, :] = np.dot(x.T, grad_out)
+    for j in range(grad_out.shape[1]):
+        total = np.float32(0.0)
+        for i in range(grad_out.shape[0]):
+            total += grad_out[i, j]
+        grad_b[j] = total
+    return np.dot(grad_out, w.T)
+
+
+@numba.njit(cache=True)
+def update_kernel(
+    online, target, grad, offsets, n_actions, obs, next_obs, actions, rewards, terminated, weights, gamma, delta, wall
+):
+    """One double-DQN step's loss and gradient for every member: writes the gradient of the sum
+    of the members' losses into ``grad`` (the flat layout of ``online``) and returns the losses
+    (M,) and TD errors ``Q(s, a) - y`` (M, B). Observations (M, B, n_obs) as the replay holds
+    them: ``wall`` appends the wall features."""
+    members, rows, n_obs = obs.shape
+    n_in = n_obs + (2 if wall else 0)
+    losses = np.empty(members, dtype=np.float32)
+    td = np.empty((members, rows), dtype=np.float32)
+    both = np.empty((2 * rows, n_in), dtype=np.float32)
+    for m in range(members):
+        p = _weights(online, offsets, m, n_in, n_actions)
+        g = _weights(grad, offsets, m, n_in, n_actions)
+        both[:rows] = _inputs(obs[m], wall)
+        both[rows:] = _inputs(next_obs[m], wall)
+        q, _, h1, h2, hv, ha = _forward(both, p)
+        q_target = _forward(both[rows:], _weights(target, offsets, m, n_in, n_actions))[0]
+        grad_q = np.zeros((rows, n_actions), dtype=np.float32)
+        total = np.float32(0.0)
+        for i in range(rows):
+            best = 0
+            for j in range(1, n_actions):
+                if q[rows + i, j] > q[rows + i, best]:
+                    best = j
+            y = rewards[m, i] + np.float32(gamma) * (np.float32(1.0) - terminated[m, i]) * q_target[i, best]
+            error = q[i, actions[m, i]] - y
+            td[m, i] = error
+            size = abs(error)
+            if size < delta:
+                huber = np.float32(0.5) * error * error
+            else:
+                huber = np.float32(delta) * (size - np.float32(0.5 * delta))
+            total += weights[m, i] * huber
+            clipped = min(max(error, np.float32(-delta)), np.float32(delta))
+            grad_q[i, actions[m, i]] = weights[m, i] / np.float32(rows) * clipped
+        losses[m] = total / np.float32(rows)
+        # Q = V + A - mean(A): dV = Σ_a dQ, dA = dQ - Σ_a dQ / A
+        grad_value = np.empty(rows, dtype=np.float32)
+        grad_advantage = grad_q
+        for i in range(rows):
+            summed = np.float32(0.0)
+            for j in range(n_actions):
+                summed += grad_q[i, j]
+            grad_value[i] = summed
+            for j in range(n_actions):
+                grad_advantage[i, j] -= summed / np.float32(n_actions)
+        _, _, w2, _, wv1, _, wv2, _, wa1, _, wa2, _ = p
+        gw1, gb1, gw2, gb2, gwv1, gbv1, gwv2, gbv2, gwa1, gba1, gwa2, gba2 = g
+        ha_s, hv_s, h2_s, h1_s = ha[:rows], hv[:rows], h2[:rows], h1[:rows]
+        grad_ha = _backward_dense(ha_s, grad_advantage, wa2, gwa2, gba2)
+        # the value head's one output: dw = hv.T @ dV, dhv = dV wv2
+        grad_hv = np.empty((rows, HEAD), dtype=np.float32)
+        gbv2[0] = np.float32(0.0)
+        for k in range(HEAD):
+            gwv2[k] = np.float32(0.0)
+        for i in range(rows):
+            gbv2[0] += grad_value[i]
+            for k in range(HEAD):
+                gwv2[k] += hv_s[i, k] * grad_value[i]
+                grad_hv[i, k] = grad_value[i] * wv2[k] if hv_s[i, k] > 0 else np.float32(0.0)
+        for i in range(rows):
+            for k in range(HEAD):
+                if ha_s[i, k] <= 0:
+                    grad_ha[i, k] = np.float32(0.0)
+        grad_h2 = _backward_dense(h2_s, grad_ha, wa1, gwa1, gba1) + _backward_dense(h2_s, grad_hv, wv1, gwv1, gbv1)
+        for i in range(rows):
+            for k in range(TRUNK[1]):
+                if h2_s[i, k] <= 0:
+                    grad_h2[i, k] = np.float32(0.0)
+        grad_h1 = _backward_dense(h1_s, grad_h2, w2, gw2, gb2)
+        for i in range(rows):
+            for k in range(TRUNK[0]):
+                if h1_s[i, k] <= 0:
+                    grad_h1[i, k] = np.float32(0.0)
+        gw1[:, :] = np.dot(both[:rows].T, grad_h1)
+        for k in range(TRUNK[0]):
+            total = np.float32(0.0)
+            for i in range(rows):
+                total += grad_h1[i, k]
+            gb1[k] = total
+    return losses, td

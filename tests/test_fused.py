@@ -1,0 +1,84 @@
+"""The compiled update and forward pass (agents/fused.py) against autograd and the torch network:
+same losses, gradients and parameters after several steps to float rounding, and each member's
+update the same bits alone as stacked beside others."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from pursuit_bench.agents.config import QUICK, REPRODUCTION, AgentConfig
+from pursuit_bench.agents.dqn import DQNLearner
+from pursuit_bench.agents.replay import Batch
+
+
+def random_batch(rng: np.random.Generator, members: int, size: int, n_obs: int, n_actions: int) -> Batch:
+    return Batch(
+        indices=np.tile(np.arange(size), (members, 1)),
+        obs=rng.uniform(-1, 1, size=(members, size, n_obs)).astype(np.float32),
+        actions=rng.integers(0, n_actions, (members, size)),
+        rewards=(3 * rng.normal(size=(members, size))).astype(np.float32),  # TD errors beyond the Huber δ too
+        next_obs=rng.uniform(-1, 1, size=(members, size, n_obs)).astype(np.float32),
+        terminated=rng.integers(0, 2, (members, size)).astype(np.float32),
+        weights=rng.random((members, size)).astype(np.float32),
+    )
+
+
+def autograd_step(learner: DQNLearner, batch: Batch) -> np.ndarray:
+    """The reference: DQNLearner.loss, autograd's backward, the same Adam."""
+    losses, td = learner.loss(batch)
+    learner.optimizer.zero_grad()
+    losses.sum().backward()
+    learner.optimizer.step()
+    learner.replay.update_priorities(batch.indices, td.detach().numpy())
+    return losses.detach().numpy()
+
+
+@pytest.mark.parametrize(
+    ("config", "n_actions", "members"),
+    [(QUICK, 2, 1), (REPRODUCTION, 12, 3), (QUICK.replace(huber_delta=0.3, gamma=0.99), 24, 2)],
+)
+def test_the_compiled_update_makes_autograds_steps(config: AgentConfig, n_actions: int, members: int) -> None:
+    compiled = DQNLearner(10, n_actions, config, members=members, seed=5)
+    reference = DQNLearner(10, n_actions, config, members=members, seed=5)
+    rng = np.random.default_rng(0)
+    for _ in range(6):  # several steps: Adam's moments and the moved weights matter
+        batch = random_batch(rng, members, 64, 10, n_actions)
+        expected = autograd_step(reference, batch)
+        got = compiled.learn(batch)
+        np.testing.assert_allclose(got, expected, rtol=1e-5, atol=1e-7)
+        torch.testing.assert_close(compiled.optimizer.grad, reference.optimizer.grad, rtol=1e-4, atol=1e-8)
+        # the new priorities are the TD errors: the same to rounding
+        np.testing.assert_allclose(compiled.replay.priorities, reference.replay.priorities, rtol=1e-5, atol=1e-7)
+    assert reference.optimizer.grad.abs().max() > 1e-3  # gradients that say something
+    # Adam divides by the gradients' root mean square: its first steps move a weight by ±lr whatever
+    # the gradient's size, so parameters agree to a small fraction of the learning rate
+    lr = config.learning_rate
+    torch.testing.assert_close(compiled.optimizer.flat, reference.optimizer.flat, rtol=0, atol=1e-3 * lr)
+
+
+def test_a_members_update_is_the_same_bits_alone_and_stacked() -> None:
+    config = REPRODUCTION
+    rng = np.random.default_rng(1)
+    stacked = DQNLearner(14, 12, config, members=3, seed=[11, 12, 13])
+    alone = DQNLearner(14, 12, config, members=1, seed=[12])
+    for _ in range(3):
+        batch = random_batch(rng, 3, 64, 14, 12)
+        stacked_losses = stacked.learn(batch)
+        alone_losses = alone.learn(Batch(*(getattr(batch, f)[1:2] for f in Batch.__dataclass_fields__)))
+        assert stacked_losses[1] == alone_losses[0]
+    for mine, theirs in zip(stacked.online.parameters(), alone.online.parameters(), strict=True):
+        assert torch.equal(mine[1], theirs[0])
+
+
+@pytest.mark.parametrize("wall", [False, True])
+def test_the_compiled_forward_pass_gives_the_networks_values(wall: bool) -> None:
+    learner = DQNLearner(14, 12, QUICK.replace(wall_features=wall), members=2, seed=3)
+    obs = np.random.default_rng(2).uniform(-1, 1, size=(2, 40, 14)).astype(np.float32)
+    obs[0, 0, 4:6] = obs[0, 0, 0:2]  # coincident disks: the line of sight is +x
+    q, value = learner.act_values(obs)
+    expected_q, expected_value = learner.evaluate(obs)  # torch's network, member by member
+    np.testing.assert_allclose(q, expected_q, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(value, expected_value, rtol=1e-5, atol=1e-6)
+    assert np.array_equal(q.argmax(-1), expected_q.argmax(-1))
