@@ -126,7 +126,7 @@ def test_a_replay_stack_samples_each_member_as_its_own_replay(prioritized: bool)
     replays drawing from the same generators, through wrap-around and repeated draws."""
     members, capacity, n_obs = 4, 50, 3
     stack = ReplayStack(members, capacity, n_obs, alpha=0.6, prioritized=prioritized)
-    singles = [PrioritizedReplay(capacity, n_obs, alpha=0.6, prioritized=prioritized, sampler="flat") for _ in range(4)]
+    singles = [PrioritizedReplay(capacity, n_obs, alpha=0.6, prioritized=prioritized, sampler="tree") for _ in range(4)]
     data = np.random.default_rng(0)
     rngs_a = [np.random.default_rng(10 + m) for m in range(members)]
     rngs_b = [np.random.default_rng(10 + m) for m in range(members)]

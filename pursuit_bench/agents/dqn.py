@@ -25,6 +25,11 @@ from pursuit_bench.agents.replay import Batch, ReplayStack
 
 #: Inputs added to the observation by ``AgentConfig.wall_features``.
 WALL_FEATURES = 2
+#: Two Q-values closer than this (relative to 1 + the larger's size) are left to torch's forward
+#: pass to order (:meth:`DQNLearner.decisive_q`). The compiled pass differs from torch's by at
+#: most 2.3e-7 so measured (relative, every Q-value of the shipped agents over 600 episodes;
+#: ``tests/test_fused.py`` keeps measuring it), so a gap above 4e-6 orders both alike.
+DECISIVE_GAP = 4e-6
 
 
 def wall_features(obs: torch.Tensor) -> torch.Tensor:
@@ -115,6 +120,21 @@ class DQNLearner:
         with torch.no_grad():
             q, value = self.online.q_and_value(self.encode(obs))
         return q.numpy(), value.numpy()
+
+    def decisive_q(self, obs: np.ndarray, member: int) -> np.ndarray:
+        """Member ``member``'s Q-values (B, A) for observations (B, n_obs), fast, with every row's
+        argmax that of :meth:`evaluate` (torch's network, which the committed evaluations used):
+        the compiled forward pass, and torch's for the whole batch where some row's two best
+        actions lie closer than the two passes can differ (:data:`DECISIVE_GAP`)."""
+        flat = self.optimizer.flat.numpy()
+        stacked = np.ascontiguousarray(obs, dtype=np.float32)[None]
+        q = q_and_value_kernel(flat, self._offsets, self.n_actions, stacked, self.config.wall_features, member)[0][0]
+        top = np.sort(q, axis=-1)[:, -2:] if self.n_actions > 1 else np.zeros((len(q), 2))
+        if np.any(top[:, 1] - top[:, 0] <= DECISIVE_GAP * (1.0 + np.abs(top[:, 1]))):
+            everyone = np.zeros((self.members, *obs.shape), dtype=np.float32)
+            everyone[member] = obs
+            return self.evaluate(everyone)[0][member]
+        return q
 
     def q_values(self, obs: np.ndarray) -> np.ndarray:
         """Q-values (M, B, A) for observations (M, B, n_obs)."""

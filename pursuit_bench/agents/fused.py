@@ -23,11 +23,17 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+import scipy.linalg.cython_blas  # noqa: F401  (the BLAS numba's np.dot calls: loaded, so that it can be limited)
 import torch
+from threadpoolctl import ThreadpoolController
 from torch import nn
 
-#: The widths of the network's layers (docs/spec.md, the agents), as in ``network.py``.
 from pursuit_bench.agents.network import HEAD, TRUNK
+
+# SciPy's OpenBLAS, which numba's np.dot calls, would split even these small products over every
+# core: on a busy machine the threads wait on each other (measured: a member-update 1.5-2x slower
+# with two threads than with one). Training runs one process per core, so it gets one thread.
+ThreadpoolController().select(prefix="libscipy_openblas").limit(limits=1)
 
 
 def flatten_parameters(module: nn.Module) -> torch.Tensor:
@@ -140,14 +146,15 @@ def _forward(x, p):
 
 
 @numba.njit(cache=True)
-def q_and_value_kernel(flat, offsets, n_actions, obs, wall):
-    """Q-values (M, B, A) and V(s) (M, B) of every member for observations (M, B, n_obs)."""
+def q_and_value_kernel(flat, offsets, n_actions, obs, wall, first=0):
+    """Q-values (M, B, A) and V(s) (M, B) of members ``first …`` for observations (M, B, n_obs)."""
     members, rows, n_obs = obs.shape
     n_in = n_obs + (2 if wall else 0)
     q = np.empty((members, rows, n_actions), dtype=np.float32)
     value = np.empty((members, rows), dtype=np.float32)
     for m in range(members):
-        q_m, v_m, _, _, _, _ = _forward(_inputs(obs[m], wall), _weights(flat, offsets, m, n_in, n_actions))
+        p = _weights(flat, offsets, first + m, n_in, n_actions)
+        q_m, v_m, _, _, _, _ = _forward(_inputs(obs[m], wall), p)
         q[m] = q_m
         value[m] = v_m
     return q, value

@@ -56,7 +56,18 @@ class LearningAgent:
         return choices, self.to_env(choices, obs), q[self.member], v[self.member]
 
     def act_batch(self, obs: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> np.ndarray:
-        return self.decide(np.asarray(obs, dtype=np.float32), explore=explore, epsilon=epsilon)[1]
+        """Env actions (B, …) for observations (B, n_obs): :meth:`decide`'s, by the fast forward
+        pass whose choices are torch's (:meth:`DQNLearner.decisive_q`), drawing exploration
+        from the learner's generators exactly as :meth:`decide` does."""
+        obs = np.asarray(obs, dtype=np.float32)
+        q = self.learner.decisive_q(obs, self.member)
+        if not explore:
+            choices = q.argmax(axis=-1)
+        else:
+            everyone = np.zeros((self.learner.members, *q.shape), dtype=np.float32)
+            everyone[self.member] = q
+            choices = self.learner.choose(everyone, explore=True, epsilon=epsilon)[self.member]
+        return self.to_env(choices, obs)
 
     def act(self, observation: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any:
         return self.act_batch(np.asarray(observation)[None], explore=explore, epsilon=epsilon)[0]
@@ -129,6 +140,18 @@ class ScriptedAgent:
 
     def act(self, observation: np.ndarray, *, explore: bool = False, epsilon: float | None = None) -> Any:
         return self.act_batch(np.asarray(observation)[None])[0]
+
+
+def members_to_env(agents: list[LearningAgent], choices: np.ndarray, obs: np.ndarray) -> list[np.ndarray]:
+    """Each member's env actions for the choices (M, B) of one learner's members ``agents``
+    given their observations (M, B, n_obs): one call of the rule for all of them when they are
+    hierarchical predators that steer alike (the rule is elementwise: the same numbers)."""
+    first = agents[0]
+    if isinstance(first, HierarchicalPredator) and all(
+        isinstance(a, HierarchicalPredator) and a.avoidance == first.avoidance for a in agents
+    ):
+        return list(first.to_env(choices, obs))
+    return [agent.to_env(choices[m], obs[m]) for m, agent in enumerate(agents)]
 
 
 KINDS: dict[str, type[LearningAgent]] = {k.kind: k for k in (HierarchicalPredator, Prey, FlatPredator)}

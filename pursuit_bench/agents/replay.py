@@ -9,8 +9,9 @@ fastest at the paper's capacity 1e4, and a sum tree for large capacities. Both r
 from the stored priorities (the tree from its children), so nothing drifts with time.
 
 :class:`ReplayStack` holds the replays of every member of a stacked learner in one array with a
-member axis and samples them in one call (the cumulative sum, per member); the learners use it,
-and it is tested to draw exactly as one :class:`PrioritizedReplay` per member.
+member axis: one sum tree per member, stacked, drawn from and updated by one compiled call for all
+members (O(log n) a draw, where the cumulative sum is O(n) an update); the learners use it, and
+it is tested to draw exactly as one :class:`PrioritizedReplay` with the tree sampler per member.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
+import numba
 import numpy as np
 
 #: Above this capacity the sum tree replaces the flat cumulative sum.
@@ -231,14 +233,51 @@ class PrioritizedReplay:
         self._set_priorities(np.arange(n), np.asarray(state["priorities"], dtype=np.float64))
 
 
+@numba.njit(cache=True)
+def _tree_set(tree, leaves, slots, values):
+    """Set leaves ``slots[m]`` of member m's tree to ``values[m]`` (in order: a slot given twice
+    keeps its last value), then recompute every touched parent from its children, as
+    :meth:`SumTreeSampler.set` does."""
+    for m in range(slots.shape[0]):
+        for j in range(slots.shape[1]):
+            tree[m, leaves + slots[m, j]] = values[m, j]
+        for j in range(slots.shape[1]):
+            node = (leaves + slots[m, j]) // 2
+            while node >= 1:
+                tree[m, node] = tree[m, 2 * node] + tree[m, 2 * node + 1]
+                node //= 2
+
+
+@numba.njit(cache=True)
+def _tree_draw(tree, leaves, fractions):
+    """Slots (M, B) drawn in proportion to the leaves, ``fractions`` uniform in [0, 1): the descent
+    of :meth:`SumTreeSampler.draw`, member by member."""
+    members, size = fractions.shape
+    picks = np.empty((members, size), dtype=np.int64)
+    for m in range(members):
+        for i in range(size):
+            target = fractions[m, i] * tree[m, 1]
+            node = 1
+            while node < leaves:
+                left = tree[m, 2 * node]
+                if target >= left and tree[m, 2 * node + 1] > 0:
+                    target -= left
+                    node = 2 * node + 1
+                else:
+                    node = 2 * node
+            picks[m, i] = node - leaves
+    return picks
+
+
 class ReplayStack:
     """M prioritized replays, one per member of a stacked learner, their arrays stacked on a
     member axis so that sampling and priority updates are one call for all members.
 
-    Member m behaves exactly as a :class:`PrioritizedReplay` with the flat sampler fed the same
+    Member m behaves exactly as a :class:`PrioritizedReplay` with the tree sampler fed the same
     transitions and drawing from the same generator (``tests/test_replay.py`` checks it): the
-    same cumulative sums, the same draws, the same weights. Members add transitions in
-    lockstep (the same number each time), so the write position and size are shared.
+    same sums, the same draws, the same weights. Members add transitions in lockstep (the same
+    number each time), so the write position and size are shared. Each member's uniform draws
+    come from its own generator (a call per member: what keeps a member's draws its own).
     """
 
     def __init__(
@@ -261,7 +300,8 @@ class ReplayStack:
         self.rewards = np.zeros((members, capacity), dtype=np.float32)
         self.terminated = np.zeros((members, capacity), dtype=np.float32)
         self.priorities = np.zeros((members, capacity))  # |δ| + ε, before the exponent α
-        self.scaled = np.zeros((members, capacity))  # priorities ** α: what sampling draws from
+        self.leaves = 1 << max(capacity - 1, 1).bit_length()
+        self.tree = np.zeros((members, 2 * self.leaves))  # sums of priorities ** α over each node's leaves
         self.max_priority = np.ones(members)
         self.position = 0
         self.size = 0
@@ -280,14 +320,17 @@ class ReplayStack:
         self.rewards[:, slots] = rewards
         self.next_obs[:, slots] = next_obs
         self.terminated[:, slots] = terminated
-        self._set_priorities(slots[None, :], np.repeat(self.max_priority[:, None], k, axis=1))
+        self._set_priorities(
+            np.repeat(slots[None, :], self.members, axis=0), np.repeat(self.max_priority[:, None], k, axis=1)
+        )
         self.position = int((self.position + k) % self.capacity)
         self.size = min(self.size + k, self.capacity)
 
     def _set_priorities(self, slots: np.ndarray, priorities: np.ndarray) -> None:
+        """Every member's slots (M, k) to these priorities (M, k): a slot given twice keeps its last."""
         rows = np.arange(self.members)[:, None]
         self.priorities[rows, slots] = priorities
-        self.scaled[rows, slots] = priorities**self.alpha
+        _tree_set(self.tree, self.leaves, slots, self.priorities[rows, slots] ** self.alpha)
 
     def sample(self, batch_size: int, beta: float, rngs: list[np.random.Generator]) -> Batch:
         """``batch_size`` transitions per member (with replacement), member m drawing from
@@ -299,15 +342,9 @@ class ReplayStack:
             indices = np.stack([rng.integers(0, n, size=batch_size) for rng in rngs])
             weights = np.ones((self.members, batch_size), dtype=np.float32)
         else:
-            scaled = self.scaled[:, :n]
-            cumulative = np.cumsum(scaled, axis=1)
             fractions = np.stack([rng.random(batch_size) for rng in rngs])
-            targets = fractions * cumulative[:, -1:]
-            indices = np.stack([np.searchsorted(c, t, side="right") for c, t in zip(cumulative, targets, strict=True)])
-            over = indices >= n  # rounding at the very top: to the last slot with a value
-            for m in np.flatnonzero(over.any(axis=1)):
-                indices[m, over[m]] = np.flatnonzero(scaled[m])[-1]
-            probabilities = scaled[m_all, indices] / scaled.sum(axis=1, keepdims=True)
+            indices = _tree_draw(self.tree, self.leaves, fractions)
+            probabilities = self.tree[m_all, indices + self.leaves] / self.tree[:, 1:2]
             w = (n * probabilities) ** -beta
             weights = (w / w.max(axis=1, keepdims=True)).astype(np.float32)
         return Batch(
@@ -325,9 +362,7 @@ class ReplayStack:
         if not self.prioritized:
             return
         priorities = np.abs(np.asarray(td_errors, dtype=np.float64)) + self.priority_epsilon
-        rows = np.arange(self.members)[:, None]
-        self.priorities[rows, indices] = priorities  # a slot drawn twice keeps its last value
-        self.scaled[rows, indices] = self.priorities[rows, indices] ** self.alpha
+        self._set_priorities(np.asarray(indices), priorities)  # a slot drawn twice keeps its last value
         self.max_priority = np.maximum(self.max_priority, priorities.max(axis=1))
 
     def member_state(self, m: int) -> dict[str, Any]:
@@ -355,7 +390,10 @@ class ReplayStack:
         self.size, self.position = n, int(state["position"])
         self.max_priority[m] = float(state["max_priority"])
         self.priorities[m, :n] = np.asarray(state["priorities"], dtype=np.float64)
-        self.scaled[m, :n] = self.priorities[m, :n] ** self.alpha
+        self.tree[m] = 0.0
+        single = np.zeros((1, self.tree.shape[1]))
+        _tree_set(single, self.leaves, np.arange(n)[None], self.priorities[m : m + 1, :n] ** self.alpha)
+        self.tree[m] = single[0]
 
     def take(self, members: list[int]) -> ReplayStack:
         """A new stack holding (copies of) these members' replays, in this order."""
@@ -367,7 +405,7 @@ class ReplayStack:
             priority_epsilon=self.priority_epsilon,
             prioritized=self.prioritized,
         )
-        for name in ("obs", "next_obs", "actions", "rewards", "terminated", "priorities", "scaled", "max_priority"):
+        for name in ("obs", "next_obs", "actions", "rewards", "terminated", "priorities", "tree", "max_priority"):
             setattr(new, name, getattr(self, name)[members].copy())
         new.position, new.size = self.position, self.size
         return new

@@ -28,7 +28,7 @@ import torch
 
 from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
 from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.agents.kinds import KINDS, HierarchicalPredator, LearningAgent, ScriptedAgent
+from pursuit_bench.agents.kinds import KINDS, HierarchicalPredator, LearningAgent, ScriptedAgent, members_to_env
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
@@ -391,8 +391,9 @@ class Trainer:
             q, v = group.learner.act_values(obs)
             chosen = group.learner.choose(q, explore=True)
             decided.append((obs, chosen))
+            env_actions = members_to_env(group.agents, chosen, obs)
             for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):
-                put_actions(actions[r], i, agent.to_env(chosen[m], obs[m]))
+                put_actions(actions[r], i, env_actions[m])
                 if agent.kind == "hierarchical":
                     self.runs[r].q_values[:, i], self.runs[r].values[:, i] = q[m], v[m]
         for r in active:

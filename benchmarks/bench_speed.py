@@ -1,0 +1,183 @@
+"""Training and evaluation against the code before the compiled update (issue 35), measured in one
+run: the reference is a git worktree of commit ``--reference`` (default ``8ec03b5``, the last
+commit before it), imported in its own processes beside ours, repeats interleaved.
+
+    python benchmarks/bench_speed.py [--repeats 3] [--episodes 1000] [--reference 8ec03b5]
+
+Prints, each as a median of ``--repeats`` and as today / reference:
+
+- transitions/s (arena-steps of one run, every agent learning) of one run at the ``reproduction``
+  preset (32 arenas, one update per env step) in 1p-high and in 3p-high-shared;
+- 10 seeds of 1p-high stacked in one process, and the ratio to one run alone (one after another,
+  10 runs take 10 times one): ours against ours, and ours stacked against the reference alone;
+- one member-update (batch 64, the prey-sized network, replay filled) at 1 and 24 members, in ms
+  and as a multiple of its floating-point bound (its matrix products' FLOPs over the rate of
+  256×256 products measured in the same process);
+- evaluation episodes/s of the paper's protocol (the shipped 1p-high agents, ``--episodes`` per
+  variant), and whether the two evaluations' results are identical.
+
+One torch thread, as on a busy two-core machine. Needs git (the worktree is made under the
+system's temporary folder and removed at the end).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: What a worker process measures: ``python bench_speed.py --worker KIND ARGS…`` prints one JSON line.
+WORKER = r"""
+import json, statistics, sys, time
+import numpy as np
+import torch
+torch.set_num_threads(1)
+import pursuit_bench
+from pursuit_bench.agents.config import REPRODUCTION
+from pursuit_bench.training.train import TrainConfig, Trainer
+
+kind, args = sys.argv[1], sys.argv[2:]
+AGENT = REPRODUCTION.replace(learning_starts=500)
+
+def transitions_per_second(condition, runs, steps):
+    configs = [TrainConfig(condition=condition, agent=AGENT, num_envs=32, seed=s, episodes=10**9) for s in range(runs)]
+    trainer = Trainer(configs)
+    while trainer.groups[0].learner.steps < AGENT.learning_starts + 32:
+        trainer.step()  # the replays past learning_starts: we time learning, not warm-up
+    start = time.perf_counter()
+    for _ in range(steps):
+        trainer.step()
+    return steps * 32 * runs / (time.perf_counter() - start)
+
+def member_update_seconds(members):
+    from pursuit_bench.agents.dqn import DQNLearner
+    from pursuit_bench.env.task import obs_size
+    n_obs = obs_size(2)
+    learner = DQNLearner(n_obs, 12, AGENT, members=members, seed=0)
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        obs = rng.normal(size=(members, 100, n_obs)).astype(np.float32)
+        actions, rewards = rng.integers(0, 12, (members, 100)), rng.normal(size=(members, 100))
+        learner.store(obs, actions, rewards, obs, np.zeros((members, 100)))
+    learner.update()
+    updates = max(10, 200 // members)
+    start = time.perf_counter()
+    for _ in range(updates):
+        learner.update()
+    return (time.perf_counter() - start) / (updates * members)
+
+def matmul_rate():
+    a = torch.randn(256, 256)
+    torch.mm(a, a)
+    start = time.perf_counter()
+    for _ in range(200):
+        torch.mm(a, a)
+    return 200 * 2 * 256**3 / (time.perf_counter() - start)
+
+if kind == "train":
+    print(json.dumps(transitions_per_second(args[0], int(args[1]), int(args[2]))))
+elif kind == "update":
+    print(json.dumps({"seconds": member_update_seconds(int(args[0])), "matmul": matmul_rate()}))
+elif kind == "eval":
+    from pursuit_bench import pretrained
+    from pursuit_bench.training.evaluate import evaluate_agents
+    agents = pretrained.load(args[0])
+    start = time.perf_counter()
+    result = evaluate_agents(args[0], agents, episodes=int(args[1]), seed=12345)
+    elapsed = time.perf_counter() - start
+    plays = 1 + 2 * len(result["panels"]) + (2 if result["prey_check"] else 0)
+    print(json.dumps({"episodes_per_s": plays * int(args[1]) / elapsed, "result": result}))
+"""
+
+
+def member_update_flops(n_obs: int, n_actions: int, batch: int) -> float:
+    """FLOPs of one member-update: the matrix products of the online pass on s, the online and
+    target passes on s' and the backward pass (twice a forward's), 2 per multiply-add."""
+    trunk = n_obs * 64 + 64 * 64
+    heads = 64 * 32 + 32 + 64 * 32 + 32 * n_actions
+    forward = 2.0 * batch * (trunk + heads)
+    return 3 * forward + 2 * forward
+
+
+def measure(tree: Path, *args: str) -> object:
+    """One worker's answer, with ``tree``'s pursuit_bench first on the path."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    done = subprocess.run([sys.executable, "-c", WORKER, *args], env=env, capture_output=True, text=True, cwd=tree)
+    if done.returncode != 0:
+        raise SystemExit(f"worker {args} in {tree} failed:\n{done.stderr}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def medians(trees: dict[str, Path], repeats: int, *args: str) -> dict[str, list[object]]:
+    """Every tree's answers to the same measurement, repeats interleaved."""
+    answers: dict[str, list[object]] = {name: [] for name in trees}
+    for _ in range(repeats):
+        for name, tree in trees.items():
+            answers[name].append(measure(tree, *args))
+    return answers
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--episodes", type=int, default=1000, help="evaluation episodes per variant")
+    parser.add_argument("--steps", type=int, default=150, help="env steps timed per training measurement")
+    parser.add_argument("--reference", default="8ec03b5", help="the commit measured against")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as scratch:
+        reference = Path(scratch) / "reference"
+        add = ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(reference), args.reference]
+        subprocess.run(add, check=True)
+        try:
+            report(args, {"today": ROOT, "reference": reference})
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(reference)], check=False)
+
+
+def report(args: argparse.Namespace, trees: dict[str, Path]) -> None:
+    print(f"today: {ROOT}; reference: commit {args.reference}; medians of {args.repeats}, one torch thread")
+    med = statistics.median
+    for condition in ("1p-high", "3p-high-shared"):
+        rates = medians(trees, args.repeats, "train", condition, "1", str(args.steps))
+        today, before = med(rates["today"]), med(rates["reference"])  # type: ignore[type-var]
+        print(
+            f"one run, {condition}, reproduction preset: {today:,.0f} transitions/s "
+            f"against {before:,.0f}: {today / before:.2f}x"
+        )
+    stacked = medians(trees, args.repeats, "train", "1p-high", "10", str(max(10, args.steps // 5)))
+    alone = medians(trees, args.repeats, "train", "1p-high", "1", str(args.steps))
+    for name in trees:
+        s, a = med(stacked[name]), med(alone[name])  # type: ignore[type-var]
+        print(f"10 seeds of 1p-high stacked, {name}: {s:,.0f} transitions/s, {s / a:.2f}x one after another ({a:,.0f})")
+    ratio = med(stacked["today"]) / med(alone["reference"])  # type: ignore[type-var, operator]
+    print(f"  today's stack against the reference's runs one after another: {ratio:.2f}x")
+    from pursuit_bench.env.task import obs_size
+
+    bound_flops = member_update_flops(obs_size(2) + 2, 12, 64)  # the worker's learner: 1p, wall features
+    for members in (1, 24):
+        answers = medians(trees, args.repeats, "update", str(members))
+        for name in trees:
+            seconds = med(a["seconds"] for a in answers[name])  # type: ignore[index]
+            bound = bound_flops / med(a["matmul"] for a in answers[name])  # type: ignore[index]
+            print(
+                f"member-update at {members:2d} members, {name}: "
+                f"{seconds * 1e3:.3f} ms = {seconds / bound:.1f}x its bound"
+            )
+    evaluations = medians(trees, args.repeats, "eval", "1p-high", str(args.episodes))
+    rates = {name: med(a["episodes_per_s"] for a in evaluations[name]) for name in trees}  # type: ignore[index]
+    same = all(a["result"] == evaluations["reference"][0]["result"] for a in evaluations["today"])  # type: ignore[index]
+    print(
+        f"evaluation, 1p-high shipped agents, {args.episodes} episodes per variant: {rates['today']:,.0f} episodes/s "
+        f"against {rates['reference']:,.0f}: {rates['today'] / rates['reference']:.2f}x; results identical: {same}"
+    )
+
+
+if __name__ == "__main__":
+    main()
