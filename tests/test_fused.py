@@ -82,3 +82,46 @@ def test_the_compiled_forward_pass_gives_the_networks_values(wall: bool) -> None
     np.testing.assert_allclose(q, expected_q, rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(value, expected_value, rtol=1e-5, atol=1e-6)
     assert np.array_equal(q.argmax(-1), expected_q.argmax(-1))
+
+
+def test_decisions_are_torchs_even_where_actions_tie() -> None:
+    learner = DQNLearner(14, 12, REPRODUCTION, members=2, seed=4)
+    obs = np.random.default_rng(5).uniform(-1, 1, size=(200, 14)).astype(np.float32)
+    everyone = np.zeros((2, 200, 14), dtype=np.float32)
+    everyone[1] = obs
+    torch_q = learner.evaluate(everyone)[0][1]
+    assert np.array_equal(learner.decisive_q(obs, 1).argmax(-1), torch_q.argmax(-1))
+    with torch.no_grad():  # every action worth the same: too close to call, torch's numbers decide
+        learner.online.advantage2.weight[1] = 0.0
+        learner.online.advantage2.bias[1] = 0.0
+    tied = learner.decisive_q(obs, 1)
+    everyone_tied = learner.evaluate(everyone)[0][1]
+    assert np.array_equal(tied, everyone_tied)  # torch's own values, bit for bit
+
+
+@pytest.mark.parametrize("condition", ["1p-high", "3p-high-shared"])
+def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The paper's protocol on the shipped agents, played with the compiled forward pass, gives the
+    same result, figure for figure, as played with torch's network (what the committed evaluations
+    used); and the two passes differ by far less than the gap at which decisions go to torch."""
+    from pursuit_bench import pretrained
+    from pursuit_bench.agents.dqn import DECISIVE_GAP
+    from pursuit_bench.agents.fused import q_and_value_kernel
+    from pursuit_bench.training.evaluate import evaluate_agents
+
+    fast = evaluate_agents(condition, pretrained.load(condition), episodes=40, seed=3, num_envs=16)
+    worst = [0.0]
+
+    def torchs(self: DQNLearner, obs: np.ndarray, member: int) -> np.ndarray:
+        everyone = np.zeros((self.members, *obs.shape), dtype=np.float32)
+        everyone[member] = obs
+        q = self.evaluate(everyone)[0][member]
+        flat, stacked = self.optimizer.flat.numpy(), np.ascontiguousarray(obs, dtype=np.float32)[None]
+        compiled = q_and_value_kernel(flat, self._offsets, self.n_actions, stacked, self.config.wall_features, member)
+        worst[0] = max(worst[0], float((np.abs(compiled[0][0] - q) / (1 + np.abs(q))).max()))
+        return q
+
+    monkeypatch.setattr(DQNLearner, "decisive_q", torchs)
+    # fresh agents: the prey's exploration generator starts where it starts
+    assert evaluate_agents(condition, pretrained.load(condition), episodes=40, seed=3, num_envs=16) == fast
+    assert 0 < worst[0] < DECISIVE_GAP / 4

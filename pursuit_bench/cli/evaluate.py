@@ -1,6 +1,6 @@
 """``pursuit-bench eval``: a trained RUN, or the shipped agents of a condition, evaluated by the
-paper's protocol (:func:`~pursuit_bench.training.stack.evaluate_folder`,
-:func:`~pursuit_bench.training.stack.evaluate_into`).
+paper's protocol (:func:`~pursuit_bench.training.evaluate.evaluate_folder`,
+:func:`~pursuit_bench.training.evaluate.evaluate_into`).
 """
 
 from __future__ import annotations
@@ -179,7 +179,7 @@ def _evaluate_run(
     and the status is 0."""
     from pursuit_bench.agents import external
     from pursuit_bench.study.plots import reward_bars_png
-    from pursuit_bench.training.stack import evaluate_into
+    from pursuit_bench.training.evaluate import evaluate_into
 
     kind = None
     if specs:

@@ -1,20 +1,32 @@
-"""Running fixed agents for many episodes in B arenas and collecting what they did."""
+"""The paper's evaluation protocol: fixed agents played for many episodes in B arenas
+(:func:`run_episodes`), the protocol's variants and what they did (:func:`evaluate_agents`), and
+a run folder's evaluation written beside it (:func:`evaluate_folder`, :func:`evaluate_into`)."""
 
 from __future__ import annotations
 
+import json
+import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
-from pursuit_bench.agents.kinds import HierarchicalPredator, ScriptedAgent
+from pursuit_bench.agents.kinds import HierarchicalPredator, LearningAgent, ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.perturbations import Perturbations, PerturbedEnv
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.env.world import Backend
+from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
+from pursuit_bench.training import runs
 from pursuit_bench.training.recording import EpisodeTraces, Recorder
+from pursuit_bench.training.train_config import TrainConfig
+
+#: Draws an evaluation's figure: ``figure(result, run name) -> PNG bytes`` (the command line
+#: passes ``study.plots.reward_bars_png``; this layer draws nothing itself).
+Figure = Callable[[dict[str, Any], str], bytes]
 
 
 class Actor(Protocol):
@@ -270,3 +282,78 @@ def evaluate_agents(
             else {}
         ),
     }
+
+
+def evaluate_folder(
+    folder: Path, *, tag: str | None = None, checkpoint: str = runs.CHECKPOINT, **options: Any
+) -> dict[str, Any]:
+    """Evaluate a trained run folder (its lock held by the caller) by the paper's protocol and
+    write ``eval.json``, ``eval.rrd`` and, with a ``figure``, ``eval.png`` (``eval-TAG.*``)
+    into it: :func:`evaluate_into` with these ``options`` (``episodes`` and ``seed`` needed).
+    ``checkpoint``: which of the folder's checkpoints (the latest by default, or a milestone's).
+    Returns the result."""
+    config, agents, about = runs.described(folder, checkpoint)
+    return evaluate_into(runs.eval_paths(folder, tag), config, agents, {**about, "tag": tag}, **options)
+
+
+def evaluate_into(
+    paths: dict[str, Path],
+    config: TrainConfig,
+    agents: dict[str, LearningAgent | ScriptedAgent],
+    about: dict[str, Any],
+    *,
+    episodes: int,
+    seed: int,
+    num_envs: int = 64,
+    record: bool = True,
+    check: Callable[[], None] = lambda: None,
+    predator_kind: str | None = None,
+    perturbations: Perturbations | None = None,
+    figure: Figure | None = None,
+) -> dict[str, Any]:
+    """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
+    (with ``about`` and the training config), its ``figure`` (if given) and a recording to ``paths``
+    (``runs.eval_paths``) together: each is written under a temporary name and renamed when all
+    are complete, so an interruption leaves the previous ones as they were. ``check()`` is
+    called before every step and once more before the files are put in place: an exception it
+    raises stops the evaluation with the previous files untouched. ``predator_kind`` names the
+    predators in the result (default: the config's); ``perturbations`` change the world and the
+    senses of every variant alike (:mod:`pursuit_bench.env.perturbations`)."""
+    partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
+    recorder = None
+    try:
+        if record:
+            described = {"condition": config.condition, "evaluation": True, **config.to_dict()}
+            recorder = Recorder(partial["rrd"], list(agents), described)
+        result = evaluate_agents(
+            config.condition,
+            agents,  # type: ignore[arg-type]
+            episodes=episodes,
+            seed=seed,
+            num_envs=num_envs,
+            recorder=recorder,
+            check=check,
+            perturbations=perturbations,
+            **{**config.protocol, "predator_kind": predator_kind or config.predator},
+        )
+        result.update({**about, "training": config.to_dict()})
+        if recorder is not None:
+            recorder.close()
+        if figure is not None:
+            atomic_write_bytes(partial["png"], figure(result, paths["json"].parent.name))
+        atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
+        check()  # the last point at which the previous results stay as they were
+        for kind in ("rrd", "png", "json"):  # eval.json last: it says the set is complete
+            if partial[kind].exists():
+                os.replace(partial[kind], paths[kind])
+        if recorder is None:
+            paths["rrd"].unlink(missing_ok=True)  # an older recording would not match
+        if figure is None:
+            paths["png"].unlink(missing_ok=True)  # nor an older figure
+    except BaseException:
+        if recorder is not None:
+            recorder.close()
+        for path in partial.values():
+            path.unlink(missing_ok=True)
+        raise
+    return result

@@ -32,7 +32,7 @@ from pursuit_bench.training import runs
 from pursuit_bench.training.train import TrainConfig
 
 if TYPE_CHECKING:
-    from pursuit_bench.training.stack import Figure
+    from pursuit_bench.training.evaluate import Figure
 
 SWEEP_FORMAT = "pursuit-bench-sweep-1"
 PLAN = "sweep.json"
@@ -277,7 +277,7 @@ class Work:
     threads: int = 1
     """torch threads per stack."""
     figure: Figure | None = None
-    """Draws each evaluation's figure (:func:`~pursuit_bench.training.stack.evaluate_into`)."""
+    """Draws each evaluation's figure (:func:`~pursuit_bench.training.evaluate.evaluate_into`)."""
 
 
 def run_stack(out: Path, names: list[str], messages: Any, work: Work = Work()) -> None:
@@ -288,7 +288,8 @@ def run_stack(out: Path, names: list[str], messages: Any, work: Work = Work()) -
     import torch
 
     from pursuit_bench.io.signals import SignalCatcher
-    from pursuit_bench.training.stack import FolderRun, evaluate_folder, train_stack
+    from pursuit_bench.training.evaluate import evaluate_folder
+    from pursuit_bench.training.stack import FolderRun, train_stack
 
     torch.set_num_threads(work.threads)
     plan = SweepPlan.from_dict(json.loads((out / PLAN).read_text())["plan"])
@@ -363,7 +364,7 @@ def run_sweep(
     (``"ray"``, on the cluster at ``address`` or a local instance of ``workers`` CPUs).
     Each stack trains on ``threads`` torch threads. ``on_message`` hears the workers'
     messages; when ``should_stop()`` turns true the workers are stopped (local ones checkpoint
-    first); ``figure`` draws each evaluation's figure (:func:`~pursuit_bench.training.stack.evaluate_into`).
+    first); ``figure`` draws each evaluation's figure (:func:`~pursuit_bench.training.evaluate.evaluate_into`).
     Returns whether every run is done."""
     configs = plan.runs()
     todo = [
