@@ -125,3 +125,16 @@ def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monke
     # fresh agents: the prey's exploration generator starts where it starts
     assert evaluate_agents(condition, pretrained.load(condition), episodes=40, seed=3, num_envs=16) == fast
     assert 0 < worst[0] < DECISIVE_GAP / 4
+
+
+def test_a_groups_predators_steer_in_one_call_as_each_alone() -> None:
+    from pursuit_bench.agents.kinds import HierarchicalPredator, members_to_env
+
+    learner = DQNLearner(14, 2, QUICK, members=3, seed=0)
+    agents = [HierarchicalPredator(f"predator_{m}", learner, m) for m in range(3)]
+    rng = np.random.default_rng(6)
+    obs = rng.uniform(-1, 1, size=(3, 32, 14)).astype(np.float32)
+    choices = rng.integers(0, 2, (3, 32))
+    together = members_to_env(agents, choices, obs)
+    for m, agent in enumerate(agents):
+        np.testing.assert_array_equal(together[m], agent.to_env(choices[m], obs[m]))
