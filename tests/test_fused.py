@@ -53,9 +53,9 @@ def test_the_compiled_update_makes_autograds_steps(config: AgentConfig, n_action
         np.testing.assert_allclose(compiled.replay.priorities, reference.replay.priorities, rtol=1e-5, atol=1e-7)
     assert reference.optimizer.grad.abs().max() > 1e-3  # gradients that say something
     # Adam divides by the gradients' root mean square: its first steps move a weight by ±lr whatever
-    # the gradient's size, so parameters agree to a small fraction of the learning rate
+    # the gradient's size, so parameters agree to a hundredth of the learning rate
     lr = config.learning_rate
-    torch.testing.assert_close(compiled.optimizer.flat, reference.optimizer.flat, rtol=0, atol=1e-3 * lr)
+    torch.testing.assert_close(compiled.optimizer.flat, reference.optimizer.flat, rtol=0, atol=1e-2 * lr)
 
 
 def test_a_members_update_is_the_same_bits_alone_and_stacked() -> None:

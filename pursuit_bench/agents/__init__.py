@@ -1,6 +1,7 @@
 """Learning agents: dueling double DQN with prioritized replay, one independent learner per agent
-(optionally stacked into one batched computation), the hierarchical predator, the prey, the flat
-ablation and the scripted baselines, and the protocol outside agents follow (``external``).
+(optionally stacked into one batched computation, its update one compiled call: ``fused``), the
+hierarchical predator, the prey, the flat ablation and the scripted baselines, and the protocol
+outside agents follow (``external``).
 Imports ``rules``, ``env`` and ``io``.
 
 torch is imported when a learner, network or agent kind is first used: ``agents.config`` alone
