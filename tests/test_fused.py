@@ -105,7 +105,7 @@ def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monke
     same result, figure for figure, as played with torch's network (what the committed evaluations
     used); and the two passes differ by far less than the gap at which decisions go to torch."""
     from pursuit_bench import pretrained
-    from pursuit_bench.agents.dqn import DECISIVE_GAP
+    from pursuit_bench.agents.dqn import DECISIVE_GAP, decision_scale
     from pursuit_bench.agents.fused import q_and_value_kernel
     from pursuit_bench.training.evaluate import evaluate_agents
 
@@ -117,8 +117,11 @@ def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monke
         everyone[member] = obs
         q = self.evaluate(everyone)[0][member]
         flat, stacked = self.optimizer.flat.numpy(), np.ascontiguousarray(obs, dtype=np.float32)[None]
-        compiled = q_and_value_kernel(flat, self._offsets, self.n_actions, stacked, self.config.wall_features, member)
-        worst[0] = max(worst[0], float((np.abs(compiled[0][0] - q) / (1 + np.abs(q))).max()))
+        compiled_q, compiled_v = q_and_value_kernel(
+            flat, self._offsets, self.n_actions, stacked, self.config.wall_features, member
+        )
+        scale = decision_scale(compiled_q[0], compiled_v[0])[:, None]
+        worst[0] = max(worst[0], float((np.abs(compiled_q[0] - q) / scale).max()))
         return q
 
     monkeypatch.setattr(DQNLearner, "decisive_q", torchs)
@@ -138,3 +141,15 @@ def test_a_groups_predators_steer_in_one_call_as_each_alone() -> None:
     together = members_to_env(agents, choices, obs)
     for m, agent in enumerate(agents):
         np.testing.assert_array_equal(together[m], agent.to_env(choices[m], obs[m]))
+
+
+def test_the_compiled_passes_refuse_what_would_read_past_a_members_parameters() -> None:
+    learner = DQNLearner(10, 12, REPRODUCTION, members=2, seed=0)
+    with pytest.raises(ValueError, match=r"obs of shape \(2, 4, 11\): expected \(2, B, 10\)"):
+        learner.act_values(np.zeros((2, 4, 11), dtype=np.float32))
+    with pytest.raises(ValueError, match="member=2"):
+        learner.decisive_q(np.zeros((4, 10), dtype=np.float32), 2)
+    batch = random_batch(np.random.default_rng(0), 2, 8, 10, 12)
+    batch.actions[0, 0] = 12
+    with pytest.raises(ValueError, match=r"values in \[0, 12\)"):
+        learner.learn(batch)

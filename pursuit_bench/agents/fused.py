@@ -21,6 +21,8 @@ The arithmetic is autograd's, in another order: losses and gradients equal
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numba
 import numpy as np
 import scipy.linalg.cython_blas  # noqa: F401  (the BLAS numba's np.dot calls: loaded, so that it can be limited)
@@ -30,10 +32,19 @@ from torch import nn
 
 from pursuit_bench.agents.network import HEAD, TRUNK
 
-# SciPy's OpenBLAS, which numba's np.dot calls, would split even these small products over every
-# core: on a busy machine the threads wait on each other (measured: a member-update 1.5-2x slower
-# with two threads than with one). Training runs one process per core, so it gets one thread.
-ThreadpoolController().select(prefix="libscipy_openblas").limit(limits=1)
+
+def _one_thread_for_scipys_blas() -> None:
+    """SciPy's OpenBLAS, which numba's np.dot calls, would split even these small products over
+    every core: on a busy machine the threads wait on each other (measured: a member-update
+    1.5-2x slower with two threads than with one). Training runs one process per core, so SciPy's
+    BLAS gets one thread in this process; numpy's own BLAS (a library of its own) is left alone."""
+    controller = ThreadpoolController()
+    scipys = [lib.filepath for lib in controller.lib_controllers if "scipy" in Path(lib.filepath).parent.name]
+    if scipys:
+        controller.select(filepath=scipys).limit(limits=1)
+
+
+_one_thread_for_scipys_blas()
 
 
 def flatten_parameters(module: nn.Module) -> torch.Tensor:
@@ -101,7 +112,8 @@ def _inputs(obs, wall):
             x, y = obs[i, 0], obs[i, 1]
             dx, dy = obs[i, 4] - x, obs[i, 5] - y
             norm = np.sqrt(dx * dx + dy * dy)
-            lx, ly = (dx / norm, dy / norm) if norm > 0 else (np.float32(1.0), np.float32(0.0))
+            scale = max(norm, np.float32(1e-12))  # torch's clamp_min
+            lx, ly = (dx / scale, dy / scale) if norm > 0 else (np.float32(1.0), np.float32(0.0))
             out[i, n_obs] = x * lx + y * ly
             out[i, n_obs + 1] = y * lx - x * ly
     return out
