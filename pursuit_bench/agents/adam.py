@@ -19,7 +19,7 @@ import torch
 from torch import nn
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _adam_step(param, grad, exp_avg, exp_avg_sq, weight1, beta2, weight2, step_size, correction2, eps):
     """One Adam step over flat float32 buffers, in place (the scalars float32, as torch rounds them)."""
     for i in range(param.size):

@@ -68,7 +68,7 @@ def parameter_offsets(module: nn.Module) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _weights(flat, offsets, member, n_in, n_actions):
     """Member ``member``'s twelve parameters as (in, out) and (out,) views of ``flat``."""
     shapes = ((n_in, TRUNK[0]), (TRUNK[0], TRUNK[1]), (TRUNK[1], HEAD), (HEAD, 1), (TRUNK[1], HEAD), (HEAD, n_actions))
@@ -100,7 +100,7 @@ def _weights(flat, offsets, member, n_in, n_actions):
     )
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _inputs(obs, wall):
     """What the network sees of observations (B, n_obs): a contiguous copy, with the wall features
     ``(u, v)`` appended when ``wall`` (:func:`pursuit_bench.agents.dqn.wall_features`)."""
@@ -119,7 +119,7 @@ def _inputs(obs, wall):
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _dense_relu(x, w, b):
     """``relu(x @ w + b)``."""
     out = np.dot(x, w)
@@ -130,7 +130,7 @@ def _dense_relu(x, w, b):
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _forward(x, p):
     """Q-values (B, A), V(s) (B,) and the hidden layers of one member for inputs x (B, in)."""
     w1, b1, w2, b2, wv1, bv1, wv2, bv2, wa1, ba1, wa2, ba2 = p
@@ -157,7 +157,7 @@ def _forward(x, p):
     return q, value, h1, h2, hv, ha
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def q_and_value_kernel(flat, offsets, n_actions, obs, wall, first=0):
     """Q-values (M, B, A) and V(s) (M, B) of members ``first …`` for observations (M, B, n_obs)."""
     members, rows, n_obs = obs.shape
@@ -172,7 +172,7 @@ def q_and_value_kernel(flat, offsets, n_actions, obs, wall, first=0):
     return q, value
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _backward_dense(x, grad_out, w, grad_w, grad_b):
     """Write ``x.T @ grad_out`` into grad_w and the column sums into grad_b; the input's gradient."""
     grad_w[:, :] = np.dot(x.T, grad_out)
@@ -184,7 +184,7 @@ def _backward_dense(x, grad_out, w, grad_w, grad_b):
     return np.dot(grad_out, w.T)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def update_kernel(
     online, target, grad, offsets, n_actions, obs, next_obs, actions, rewards, terminated, weights, gamma, delta, wall
 ):

@@ -347,13 +347,19 @@ class ReplayStack:
             probabilities = self.tree[m_all, indices + self.leaves] / self.tree[:, 1:2]
             w = (n * probabilities) ** -beta
             weights = (w / w.max(axis=1, keepdims=True)).astype(np.float32)
+        flat = (indices + m_all * self.capacity).ravel()  # one take per array: faster than 2-D indexing
+
+        def taken(array: np.ndarray) -> np.ndarray:
+            rows = array.reshape(self.members * self.capacity, *array.shape[2:])
+            return np.take(rows, flat, axis=0).reshape(*indices.shape, *array.shape[2:])
+
         return Batch(
             indices=indices,
-            obs=self.obs[m_all, indices],
-            actions=self.actions[m_all, indices],
-            rewards=self.rewards[m_all, indices],
-            next_obs=self.next_obs[m_all, indices],
-            terminated=self.terminated[m_all, indices],
+            obs=taken(self.obs),
+            actions=taken(self.actions),
+            rewards=taken(self.rewards),
+            next_obs=taken(self.next_obs),
+            terminated=taken(self.terminated),
             weights=weights,
         )
 
