@@ -33,6 +33,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_train import member_update_flops  # noqa: E402  (the same bound as the stacking benchmark's)
 
 #: What a worker process measures: ``python bench_speed.py --worker KIND ARGS…`` prints one JSON line.
 WORKER = r"""
@@ -100,15 +102,6 @@ elif kind == "eval":
     plays = 1 + 2 * len(result["panels"]) + (2 if result["prey_check"] else 0)
     print(json.dumps({"episodes_per_s": plays * int(args[1]) / elapsed, "result": result}))
 """
-
-
-def member_update_flops(n_obs: int, n_actions: int, batch: int) -> float:
-    """FLOPs of one member-update: the matrix products of the online pass on s, the online and
-    target passes on s' and the backward pass (twice a forward's), 2 per multiply-add."""
-    trunk = n_obs * 64 + 64 * 64
-    heads = 64 * 32 + 32 + 64 * 32 + 32 * n_actions
-    forward = 2.0 * batch * (trunk + heads)
-    return 3 * forward + 2 * forward
 
 
 def measure(tree: Path, *args: str) -> object:

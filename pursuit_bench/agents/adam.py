@@ -31,6 +31,27 @@ def _adam_step(param, grad, exp_avg, exp_avg_sq, weight1, beta2, weight2, step_s
         param[i] = param[i] + -step_size * (m / (np.sqrt(v) / correction2 + eps))
 
 
+def flatten_parameters(module: nn.Module) -> torch.Tensor:
+    """Rebind every parameter of ``module`` as a view of one flat tensor, in
+    ``module.parameters()`` order, and return it: a copy into the module's parameters (e.g.
+    ``load_state_dict``) lands in the flat tensor, and the flat tensor is what the kernels read."""
+    params = list(module.parameters())
+    flat = torch.zeros(sum(p.numel() for p in params))
+    offset = 0
+    for p in params:
+        n = p.numel()
+        flat[offset : offset + n].copy_(p.detach().reshape(-1))
+        p.data = flat[offset : offset + n].view_as(p)
+        offset += n
+    return flat
+
+
+def parameter_offsets(module: nn.Module) -> np.ndarray:
+    """Where each parameter starts in :func:`flatten_parameters`'s buffer."""
+    sizes = [p.numel() for p in module.parameters()]
+    return np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+
+
 class FlatAdam:
     """Adam for every parameter of ``module``. ``exp_avg[i]`` and ``exp_avg_sq[i]`` are views
     shaped like parameter i; ``step`` counts the steps taken (shared by all parameters)."""
@@ -40,22 +61,18 @@ class FlatAdam:
     ) -> None:
         self.lr, self.betas, self.eps = lr, betas, eps
         self.params = list(module.parameters())
-        total = sum(p.numel() for p in self.params)
-        self.flat = torch.zeros(total)
+        self.flat = flatten_parameters(module)
+        total = self.flat.numel()
         self.grad = torch.zeros(total)
         self._m = torch.zeros(total)
         self._v = torch.zeros(total)
         self.exp_avg: list[torch.Tensor] = []
         self.exp_avg_sq: list[torch.Tensor] = []
-        offset = 0
-        for p in self.params:
+        for p, offset in zip(self.params, parameter_offsets(module).tolist(), strict=True):
             n = p.numel()
-            self.flat[offset : offset + n].copy_(p.detach().reshape(-1))
-            p.data = self.flat[offset : offset + n].view_as(p)
             p.grad = self.grad[offset : offset + n].view_as(p)  # backward adds into it in place
             self.exp_avg.append(self._m[offset : offset + n].view_as(p))
             self.exp_avg_sq.append(self._v[offset : offset + n].view_as(p))
-            offset += n
         self.step_count = 0
 
     def zero_grad(self) -> None:

@@ -17,9 +17,9 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from pursuit_bench.agents.adam import FlatAdam
+from pursuit_bench.agents.adam import FlatAdam, flatten_parameters, parameter_offsets
 from pursuit_bench.agents.config import AgentConfig
-from pursuit_bench.agents.fused import flatten_parameters, parameter_offsets, q_and_value_kernel, update_kernel
+from pursuit_bench.agents.fused import q_and_value_kernel, update_kernel
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, ReplayStack
 

@@ -10,7 +10,8 @@ loss, and the backward pass written out by the chain rule, its matrix products b
 never depends on how many are stacked beside it or where it sits. Adam then steps on the flat
 gradient buffer the kernel wrote (:class:`~pursuit_bench.agents.adam.FlatAdam`).
 
-The parameters are read from the flat buffers the learner keeps (:func:`flatten_parameters`):
+The parameters are read from the flat buffers the learner keeps
+(:func:`~pursuit_bench.agents.adam.flatten_parameters`):
 parameter ``i`` of member ``m`` is the block ``offsets[i] + m · size_i`` of ``size_i`` numbers,
 row-major ``(in, out)`` as :class:`~pursuit_bench.agents.network.StackedLinear` holds it.
 
@@ -26,9 +27,7 @@ from pathlib import Path
 import numba
 import numpy as np
 import scipy.linalg.cython_blas  # noqa: F401  (the BLAS numba's np.dot calls: loaded, so that it can be limited)
-import torch
 from threadpoolctl import ThreadpoolController
-from torch import nn
 
 from pursuit_bench.agents.network import HEAD, TRUNK
 
@@ -45,27 +44,6 @@ def _one_thread_for_scipys_blas() -> None:
 
 
 _one_thread_for_scipys_blas()
-
-
-def flatten_parameters(module: nn.Module) -> torch.Tensor:
-    """Rebind every parameter of ``module`` as a view of one flat tensor, in
-    ``module.parameters()`` order, and return it: a copy into the module's parameters (e.g.
-    ``load_state_dict``) lands in the flat tensor, and the flat tensor is what the kernels read."""
-    params = list(module.parameters())
-    flat = torch.zeros(sum(p.numel() for p in params))
-    offset = 0
-    for p in params:
-        n = p.numel()
-        flat[offset : offset + n].copy_(p.detach().reshape(-1))
-        p.data = flat[offset : offset + n].view_as(p)
-        offset += n
-    return flat
-
-
-def parameter_offsets(module: nn.Module) -> np.ndarray:
-    """Where each parameter starts in :func:`flatten_parameters`'s buffer."""
-    sizes = [p.numel() for p in module.parameters()]
-    return np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -396,8 +396,7 @@ class ReplayStack:
         self.size, self.position = n, int(state["position"])
         self.max_priority[m] = float(state["max_priority"])
         self.priorities[m, :n] = np.asarray(state["priorities"], dtype=np.float64)
-        self.tree[m] = 0.0
-        single = np.zeros((1, self.tree.shape[1]))
+        single = np.zeros((1, self.tree.shape[1]))  # member m's tree rebuilt from its priorities
         _tree_set(single, self.leaves, np.arange(n)[None], self.priorities[m : m + 1, :n] ** self.alpha)
         self.tree[m] = single[0]
 
