@@ -1,6 +1,7 @@
 """How often a 95 % interval over seeds holds the true mean: the t-interval the reports use
 (``pursuit_bench.study.statistics.coverage``) beside the percentile bootstrap they used before, on
-normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each; and the median's
+normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each; Welch's interval and the
+equivalence test at the pool study's 8 runs a kind; and the median's
 interval the pursuit-law fits give over attacks, at 3–20 values. Prints the tables
 docs/statistics.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
 differences of results/reproduction are beside the simulated data, by the same measure.
@@ -58,6 +59,41 @@ def median_coverage(sigma: float, n: int, draws: int = 1000) -> float:
     return held / draws
 
 
+#: Runs a kind in the pool study (REPRODUCTION.md, "Does the rule help?"): hierarchical and flat.
+POOL_RUNS = 8
+#: (label, draw of the hierarchical runs, draw of the flat runs, true difference)
+WELCH_CASES = (
+    ("normal, equal spread", lambda rng, s: rng.normal(0, 1, s), lambda rng, s: rng.normal(0, 1, s), 0.0),
+    ("normal, spreads 1 and 3", lambda rng, s: rng.normal(0, 1, s), lambda rng, s: rng.normal(0, 3, s), 0.0),
+    (
+        "lognormal σ = 0.5 against normal",
+        lambda rng, s: rng.lognormal(0, 0.5, s),
+        lambda rng, s: rng.normal(0, 1, s),
+        math.exp(0.125),
+    ),
+)
+
+
+def welch_checks(margin: float = 0.05, sd: float = 0.03) -> None:
+    """Welch's interval's coverage at the pool study's runs a kind, and the equivalence test's
+    error: how often it calls two kinds equivalent when they differ by exactly the margin (at most
+    2.5 % if it means what it says), and how often it does when they do not differ at all."""
+    print(f"\n| Welch, {POOL_RUNS} runs a kind | coverage of the 95 % interval |\n|---|---:|")
+    for label, draw_h, draw_f, truth in WELCH_CASES:
+        rng = np.random.default_rng(1)
+        h, f = draw_h(rng, (DRAWS, POOL_RUNS)), draw_f(rng, (DRAWS, POOL_RUNS))
+        ci = [statistics.welch_difference(x, y)["ci"] for x, y in zip(h, f, strict=True)]
+        print(f"| {label} | {np.mean([lo <= truth <= hi for lo, hi in ci]):.1%} |")
+    print(f"\n| true difference (runs' sd {sd}) | called equivalent within ±{margin} |\n|---:|---:|")
+    for truth in (margin, 0.0):
+        rng = np.random.default_rng(2)
+        h, f = rng.normal(truth, sd, (DRAWS, POOL_RUNS)), rng.normal(0.0, sd, (DRAWS, POOL_RUNS))
+        called = np.mean(
+            [statistics.equivalence(x, y, margin)["p"] <= statistics.ALPHA for x, y in zip(h, f, strict=True)]
+        )
+        print(f"| {truth:+.2f} | {called:.1%} |")
+
+
 def pooled_skewness(groups: np.ndarray | list[np.ndarray]) -> float:
     """The sample skewness of values standardised within their group (a comparison's seeds)."""
     z = [(g - g.mean()) / g.std(ddof=1) for g in map(np.asarray, groups)]
@@ -72,6 +108,7 @@ def main() -> None:
             t = statistics.coverage(draw, truth, n, DRAWS, seed=n)
             bootstrap = percentile_bootstrap_coverage(draw, truth, n, seed=n)
             print(f"| {label} | {n} | {t:.1%} | {bootstrap:.1%} |")
+    welch_checks()
     table = report.panel_table(report.collect(ROOT / "results" / "reproduction"))
     ours = [np.array(c["differences"]) for t in table for c in t.get("paired", {}).values()]
     print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (statistics.median_interval) |")

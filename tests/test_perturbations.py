@@ -169,7 +169,7 @@ def test_cross_play_pairs_each_seeds_predators_with_every_seeds_prey() -> None:
         for s in range(3)
     ]
     jobs = [j for j in robustness._jobs([{**s, "config": _Config()} for s in sources], 10, 0, True) if "|vs|" in j[0]]
-    assert sorted((j[1], j[2]) for j in jobs) == sorted(
+    assert sorted((j[1][0], j[1][1]) for j in jobs) == sorted(
         (f"r{i}", f"r{j}") for i in range(3) for j in range(3) if i != j
     )
     done = {f"r{i}|vs|r{j}": {"margin": 10 * i + j, "always_chase": 0.0} for i in range(3) for j in range(3) if i != j}

@@ -14,6 +14,7 @@ import click
 from pursuit_bench.cli.analyze import analyze
 from pursuit_bench.cli.evaluate import evaluate
 from pursuit_bench.cli.law import law
+from pursuit_bench.cli.pool import pool
 from pursuit_bench.cli.report import report
 from pursuit_bench.cli.robust import robust
 from pursuit_bench.cli.sweep import sweep
@@ -27,7 +28,7 @@ def main() -> None:
     """pursuit-bench: predators hunt a prey; deep RL picks how hard, parallel navigation where."""
 
 
-for command in (conditions, train, evaluate, sweep, report, analyze, law, robust, view):
+for command in (conditions, train, evaluate, sweep, report, pool, analyze, law, robust, view):
     main.add_command(command)
 
 

@@ -20,13 +20,17 @@ def report(where: Path, out: Path | None) -> None:
     """Fig. 2 over seeds from a sweep's run folders, or from its compact results (what
     `scripts/export_results.py` writes): report.md and report.json (the
     panels' verdicts, paired differences, per-seed counts, power), fig2.png, forest.png,
-    counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary."""
+    counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary.
+    On a pool study's folder (pool.json, from `pursuit-bench pool`): pool-report.json, pool.md, pool.png."""
     from pursuit_bench.study import report as reports
 
     if out is not None and out.exists() and not out.is_dir():
         raise BadInput(f"--out {out}: exists and is not a folder")
     if (where / "config.json").is_file():
         _report_run(where, out or where)
+        return
+    if (where / "pool.json").is_file():
+        _report_pool(where, out or where)
         return
     try:
         if out is not None:
@@ -44,6 +48,18 @@ def report(where: Path, out: Path | None) -> None:
             f"{row['worse']} worse"
         )
     click.echo(f"written in {out or where}: {', '.join(totals['written'])}")
+
+
+def _report_pool(where: Path, out: Path) -> None:
+    """A pool study (``pursuit-bench pool``): its report rewritten from pool.json."""
+    from pursuit_bench.study import pool
+
+    try:
+        summary = pool.write_report(pool.load(where / "pool.json"), out)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    click.echo(pool.counts_markdown(summary))
+    click.echo(f"written in {out}: pool-report.json, pool.md, pool.png")
 
 
 def _report_run(folder: Path, out: Path) -> None:

@@ -537,3 +537,41 @@ def robust_png(result: dict[str, Any]) -> bytes:
     )
     fig.tight_layout(rect=(0, 0, 1, 1 - 0.9 / fig.get_figheight()))  # the two-line title keeps its room
     return _png(fig)
+
+
+def pool_png(summary: dict[str, Any]) -> bytes:
+    """Learning against budget against one pool of opponents: per condition, each kind's pool
+    margin (mean over predators) at every kept budget, mean over runs with its t-interval."""
+    curves = summary["curves"]
+    conditions = list(curves)
+    columns = 5
+    rows = -(-len(conditions) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(3.0 * columns, 2.6 * rows + 1.0), squeeze=False)
+    colors = {"hierarchical": VARIANT_COLORS["hierarchical"], "flat": VARIANT_COLORS["flat"]}
+    for i, ax in enumerate(axes.flat):
+        if i >= len(conditions):
+            ax.set_visible(False)
+            continue
+        for kind, curve in curves[conditions[i]].items():
+            x, mean = np.array(curve["episodes"]), np.array(curve["mean"])
+            ax.plot(x, mean, "o-", ms=3, color=colors[kind], label=kind)
+            if all(ci is not None for ci in curve["ci"]):
+                low, high = np.array(curve["ci"]).T
+                ax.fill_between(x, low, high, color=colors[kind], alpha=0.2, lw=0)
+        ax.axhline(0.0, color="black", lw=0.6)
+        ax.set_xscale("log")
+        ax.set_xticks(x, [f"{e / 1000:g}k" for e in x], fontsize=7)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.tick_params(axis="y", labelsize=7)
+        ax.set_title(conditions[i], fontsize=9)
+        if i % columns == 0:
+            ax.set_ylabel("pool margin", fontsize=8)
+    axes.flat[0].legend(fontsize=7, loc="best")
+    seeds = {k: len(v) for k, v in summary["seeds"].items()}
+    fig.suptitle(
+        "Margin over the better fixed mode against one pool of opponents, by training episodes\n"
+        f"mean over runs ({seeds['hierarchical']} hierarchical, {seeds['flat']} flat), band: 95 % t-interval",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return _png(fig)

@@ -10,9 +10,6 @@ averaged over the condition's predators. Over seeds it gets a t-interval
 
 from __future__ import annotations
 
-import concurrent.futures
-import json
-import multiprocessing
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -106,29 +103,25 @@ def check_opponents(config: Any, other: Any) -> None:
         raise ValueError("opponents: the two runs' agents observe differently (wall features or obstacles differ)")
 
 
-def _job(args: tuple[str, Path | str, Path | str, Perturbations, int, int]) -> tuple[str, dict[str, Any]]:
-    key, predators_from, prey_from, changes, episodes, seed = args
-    return key, _evaluate(predators_from, prey_from, changes, episodes, seed)
-
-
-def _jobs(sources: list[dict[str, Any]], episodes: int, seed: int, crossplay: bool) -> list[tuple[Any, ...]]:
-    jobs: list[tuple[Any, ...]] = []
+def _jobs(
+    sources: list[dict[str, Any]], episodes: int, seed: int, crossplay: bool
+) -> list[tuple[str, tuple[Any, ...]]]:
+    jobs: list[tuple[str, tuple[Any, ...]]] = []
     for s in sources:
         trained_with_obstacles = bool(s["config"].task_options.get("obstacles"))
-        jobs.append((f"{s['name']}|{NONE}", s["source"], s["source"], Perturbations(), episodes, seed))
+        jobs.append((f"{s['name']}|{NONE}", (s["source"], s["source"], Perturbations(), episodes, seed)))
         for name, levels in LADDERS.items():
             if name == "obstacles" and trained_with_obstacles:
                 continue
             for value in levels:
                 key = f"{s['name']}|{name}={value:g}"
-                jobs.append((key, s["source"], s["source"], perturbation(name, value), episodes, seed))
+                jobs.append((key, (s["source"], s["source"], perturbation(name, value), episodes, seed)))
     if crossplay:
         for s in sources:
             for o in sources:
                 if o is not s and (s["condition"], s["kind"]) == (o["condition"], o["kind"]):
-                    jobs.append(
-                        (f"{s['name']}|vs|{o['name']}", s["source"], o["source"], Perturbations(), episodes, seed)
-                    )
+                    args = (s["source"], o["source"], Perturbations(), episodes, seed)
+                    jobs.append((f"{s['name']}|vs|{o['name']}", args))
     return jobs
 
 
@@ -145,41 +138,12 @@ def run(
     a run folder or a shipped condition) on every rung of :data:`LADDERS` and, between sources of
     one condition and kind, in cross-play; each evaluation is kept in ``out/robust-parts/`` as it
     finishes (a rerun goes on from there). Returns :func:`summarise`'s result."""
-    from pursuit_bench.io.files import atomic_write_text
+    from pursuit_bench.study.jobs import run_jobs
 
-    parts = out / "robust-parts"
-    parts.mkdir(parents=True, exist_ok=True)
     jobs = _jobs(sources, episodes, seed, crossplay=True)
-    done: dict[str, dict[str, Any]] = {}
-    for job in jobs:
-        path = parts / f"{_file_name(job[0])}.json"
-        if path.exists():
-            saved = json.loads(path.read_text())
-            if saved["episodes"] == episodes and saved["seed"] == seed:
-                done[job[0]] = saved["result"]
-    todo = [job for job in jobs if job[0] not in done]
-    progress(len(done), len(jobs))
-
-    def keep(key: str, result: dict[str, Any]) -> None:
-        atomic_write_text(
-            parts / f"{_file_name(key)}.json", json.dumps({"episodes": episodes, "seed": seed, "result": result}) + "\n"
-        )
-        done[key] = result
-        progress(len(done), len(jobs))
-
-    if workers == 1 or len(todo) <= 1:
-        for job in todo:
-            keep(*_job(job))
-    elif todo:  # a pool that notices a worker dying (BrokenProcessPool) rather than waiting on it
-        context = multiprocessing.get_context("spawn")
-        with concurrent.futures.ProcessPoolExecutor(min(workers, len(todo)), mp_context=context) as pool:
-            for future in concurrent.futures.as_completed([pool.submit(_job, job) for job in todo]):
-                keep(*future.result())
+    stamp = {"episodes": episodes, "seed": seed}
+    done = run_jobs(jobs, _evaluate, out / "robust-parts", stamp, workers=workers, progress=progress)
     return summarise(sources, done, episodes, seed)
-
-
-def _file_name(key: str) -> str:
-    return key.replace("|", "__").replace("=", "-")
 
 
 def summarise(

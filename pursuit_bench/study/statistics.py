@@ -118,6 +118,29 @@ def welch_difference(
     return {"mean": mean, "ci": [mean - half, mean + half], "p": p, "df": df}
 
 
+def equivalence(
+    ours: Sequence[float] | np.ndarray, theirs: Sequence[float] | np.ndarray, margin: float, alpha: float = ALPHA
+) -> dict[str, Any]:
+    """Two one-sided Welch tests (TOST) that ``mean(ours) - mean(theirs)`` lies inside
+    ``(-margin, +margin)``, for two independent groups of seeds: ``p`` is the larger of the two
+    one-sided p-values (equivalence is shown at level ``alpha`` when ``p <= alpha``, that is when
+    the ``1 - 2 alpha`` Welch interval lies inside the margin); ``bound`` is the smallest margin
+    this data would show equivalence at, ``max(|low|, |high|)`` of that interval."""
+    if not margin > 0:
+        raise ValueError(f"margin={margin!r}: expected a positive equivalence margin")
+    a, b = np.asarray(ours, dtype=float), np.asarray(theirs, dtype=float)
+    welch = welch_difference(a, b, confidence=1 - 2 * alpha)
+    mean, (low, high) = welch["mean"], welch["ci"]
+    se = float(np.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b)))
+    if se == 0:
+        p = 0.0 if abs(mean) < margin else 1.0
+    else:
+        above = float(stats.t.sf((mean + margin) / se, welch["df"]))  # H0: difference <= -margin
+        below = float(stats.t.cdf((mean - margin) / se, welch["df"]))  # H0: difference >= +margin
+        p = max(above, below)
+    return {"margin": margin, "p": p, "bound": max(abs(low), abs(high))}
+
+
 def holm(pvalues: Sequence[float] | np.ndarray) -> np.ndarray:
     """Holm's step-down adjusted p-values (in the given order): the smallest of m p-values times
     m, the next times m - 1, …, each at least the one before it, at most 1. A hypothesis is

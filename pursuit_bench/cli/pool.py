@@ -1,0 +1,122 @@
+"""``pursuit-bench pool``: the hierarchical and the flat predator of a sweep judged against one pool
+of opponents at every kept budget (:mod:`pursuit_bench.study.pool`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import click
+
+from pursuit_bench.cli.options import BadInput
+
+
+@click.command(short_help="Hierarchical against flat, both judged against one pool of opponents.")
+@click.argument("sweeps", metavar="SWEEP...", type=click.Path(path_type=Path), nargs=-1, required=True)
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="Folder for pool.json and its report.")
+@click.option(
+    "--pool-seeds",
+    default=None,
+    help="Seeds whose runs supply the pool's prey and are not judged (comma-separated) [the sweep's last two].",
+)
+@click.option(
+    "--episodes", type=click.IntRange(min=1), default=60, show_default=True, help="Episodes per variant per opponent."
+)
+@click.option(
+    "--cross-episodes",
+    type=click.IntRange(min=1),
+    default=300,
+    show_default=True,
+    help="Episodes per variant of cross-kind play (own prey, the other kind's).",
+)
+@click.option("--seed", type=click.IntRange(min=0), default=12345, show_default=True, help="Seeds the evaluations.")
+@click.option("--workers", type=click.IntRange(min=1), default=None, help="Processes evaluating at once [the cores].")
+def pool(
+    sweeps: tuple[Path, ...],
+    out: Path,
+    pool_seeds: str | None,
+    episodes: int,
+    cross_episodes: int,
+    seed: int,
+    workers: int | None,
+) -> None:
+    """Judge the hierarchical and the flat runs of SWEEP (one sweep of both kinds, or one of each)
+    against a common pool: FleeingPrey and the prey of the pool seeds' runs of both kinds, at every
+    budget the sweep kept a checkpoint for, by the paper's protocol; and each run in cross-kind
+    play (its predators against the other kind's prey of the same seed). Writes pool.json (every
+    evaluation), pool-report.json, pool.md and pool.png into --out; each evaluation is kept as it
+    finishes (pool-parts/): rerunning the command goes on where it stopped. `pursuit-bench report
+    OUT` rewrites the report from pool.json."""
+    import os
+
+    from pursuit_bench.io.files import atomic_write_text
+    from pursuit_bench.study import pool as pools
+
+    sources, budgets, seeds = _sources(sweeps)
+    try:
+        chosen = tuple(seeds[-2:]) if pool_seeds is None else tuple(int(s) for s in pool_seeds.split(","))
+    except ValueError:
+        raise BadInput(f"--pool-seeds {pool_seeds}: expected comma-separated seeds, e.g. 8,9") from None
+    if unknown := [s for s in chosen if s not in seeds]:
+        raise BadInput(f"--pool-seeds: {unknown} not among the sweep's seeds {seeds}")
+    out.mkdir(parents=True, exist_ok=True)
+
+    def progress(done: int, total: int) -> None:
+        click.echo(f"pool: {done} of {total} evaluations", err=True)
+
+    try:
+        result = pools.run(
+            sources,
+            budgets,
+            out,
+            pool_seeds=chosen,
+            episodes=episodes,
+            cross_episodes=cross_episodes,
+            seed=seed,
+            workers=workers or os.cpu_count() or 1,
+            progress=progress,
+        )
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    atomic_write_text(out / "pool.json", json.dumps(result) + "\n")
+    summary = pools.write_report(result, out)
+    click.echo(pools.counts_markdown(summary))
+    click.echo(f"written: pool.json, pool-report.json, pool.md, pool.png in {out}")
+
+
+def _sources(sweeps: tuple[Path, ...]) -> tuple[list[dict[str, Any]], list[int], list[int]]:
+    """The finished hierarchical and flat runs of the sweeps, their common budgets and seeds."""
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.sweep import PLAN, SweepPlan
+
+    sources: list[dict[str, Any]] = []
+    budgets: list[int] | None = None
+    seeds: set[int] = set()
+    for where in sweeps:
+        if not (where / PLAN).is_file():
+            raise BadInput(f"{where}: not a sweep folder (no {PLAN})")
+        plan = SweepPlan.from_dict(json.loads((where / PLAN).read_text())["plan"])
+        mine = sorted({*plan.keep_checkpoints, plan.episodes})
+        if budgets is not None and mine != budgets:
+            raise BadInput(f"{where}: its budgets {mine} differ from the other sweep's {budgets}")
+        budgets = mine
+        seeds |= set(range(plan.seeds))
+        for name in sorted(plan.runs()):
+            folder = where / "runs" / name
+            if not (folder / "eval.json").is_file():
+                raise BadInput(f"{folder}: not finished (no eval.json); finish the sweep first")
+            config, _ = runs.read_config(folder)
+            if config.predator in ("hierarchical", "flat"):
+                sources.append(
+                    {
+                        "name": name,
+                        "condition": config.condition,
+                        "kind": config.predator,
+                        "seed": config.seed,
+                        "folder": str(folder),
+                    }
+                )
+    assert budgets is not None
+    return sources, budgets, sorted(seeds)

@@ -1,0 +1,481 @@
+"""Does the rule help? The hierarchical and the flat predator judged against one pool of opponents
+(``pursuit-bench pool``; REPRODUCTION.md, "Does the rule help?").
+
+A sweep trains both kinds on seeds 0 … N-1. The runs of the **pool seeds** (by default the last
+two) are not judged: their prey, at the end of training, form each condition's pool, with
+``FleeingPrey``; every other run (the **judged** runs) plays every member of its condition's pool
+by the paper's protocol (predators greedy, a learned prey ε-greedy with ε 0.1, FleeingPrey as it
+is; each predator replaced in turn by always-chase and by always-stalk on the same episodes), at
+every budget the sweep kept a checkpoint for. No judged run meets a prey it trained with, and
+both kinds meet the same prey on the same episodes: the prey of either kind learned against
+predators of its own kind, so the pool holds as many of each.
+
+A run's **pool return** for a predator is its mean return over the pool's members (equal weight);
+its **pool margin** is that minus the better of always-chase's and always-stalk's pool returns.
+Hierarchical minus flat, per panel and budget: Welch's interval over runs (the two kinds' runs
+are independent), Holm over the panels of a budget, and two one-sided tests for equivalence
+within :data:`EQUIVALENCE_MARGIN` (Holm too). Learning speed: each run's pool margin averaged over
+the budgets (the area under its curve over the span of budgets), compared alike. Cross-kind play:
+each judged run's predators against its own prey and against the prey of the other kind's run of
+the same seed, at the end of training.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.study import statistics
+
+FORMAT = "pursuit-bench-pool-1"
+KINDS = ("hierarchical", "flat")
+FLEEING = "FleeingPrey"
+#: The equivalence margin, in return per episode (a capture is worth 1): five captures in a
+#: hundred episodes. The larger of the reproduction's power margins (REPRODUCTION.md); at 0.05 a
+#: panel's two kinds differ by less than the gap between always-chase and always-stalk in any
+#: panel where the fixed modes differ at all.
+EQUIVALENCE_MARGIN = 0.05
+VERDICTS = ("rule helps", "flat better", "equivalent", "not resolved")
+#: The final budget's name among a run's checkpoints.
+FINAL = "checkpoint.pt"
+
+
+def checkpoint_name(episodes: int, final: int) -> str:
+    """The checkpoint a sweep's run keeps at ``episodes`` (its last one at ``final``)."""
+    return FINAL if episodes == final else f"checkpoint-ep{episodes}.pt"
+
+
+def plan(sources: list[dict[str, Any]], pool_seeds: tuple[int, ...]) -> dict[str, Any]:
+    """Split a sweep's runs (``name``, ``condition``, ``kind``, ``seed``, ``folder``) into the judged
+    runs and each condition's pool (FleeingPrey, then the pool seeds' runs of both kinds);
+    ValueError where a condition lacks a pool run of either kind or two judged runs of either."""
+    judged: list[dict[str, Any]] = []
+    pools: dict[str, list[dict[str, Any]]] = {}
+    for condition in [c for c in CONDITIONS if any(s["condition"] == c for s in sources)]:
+        mine = sorted((s for s in sources if s["condition"] == condition), key=lambda s: (s["kind"], s["seed"]))
+        pool = [s for s in mine if s["seed"] in pool_seeds]
+        rest = [s for s in mine if s["seed"] not in pool_seeds]
+        for kind in KINDS:
+            if not any(s["kind"] == kind for s in pool):
+                raise ValueError(f"{condition}: no {kind} run of the pool seeds {list(pool_seeds)}")
+            if sum(s["kind"] == kind for s in rest) < 2:
+                raise ValueError(f"{condition}: fewer than two judged {kind} runs (seeds outside the pool)")
+        pools[condition] = pool
+        judged += rest
+    for run in judged:
+        if any(member["folder"] == run["folder"] for member in pools[run["condition"]]):
+            raise ValueError(f"{run['name']}: a judged run's own prey is in its pool")
+    return {"judged": judged, "pools": pools}
+
+
+def _jobs(
+    layout: dict[str, Any], budgets: list[int], episodes: int, cross_episodes: int, seed: int
+) -> list[tuple[str, tuple[Any, ...]]]:
+    jobs: list[tuple[str, tuple[Any, ...]]] = []
+    for run in layout["judged"]:
+        opponents = [(FLEEING, None)] + [(m["name"], m["folder"]) for m in layout["pools"][run["condition"]]]
+        for budget in budgets:
+            checkpoint = checkpoint_name(budget, budgets[-1])
+            jobs.append((f"{run['name']}|{budget}", (run["folder"], checkpoint, opponents, episodes, seed)))
+        twin = [
+            r
+            for r in layout["judged"]
+            if (r["condition"], r["seed"]) == (run["condition"], run["seed"]) and r["kind"] != run["kind"]
+        ]
+        crossed = [("own", run["folder"])] + [("other kind", t["folder"]) for t in twin]
+        jobs.append((f"{run['name']}|cross", (run["folder"], FINAL, crossed, cross_episodes, seed)))
+    return jobs
+
+
+def play(
+    predators_from: str, checkpoint: str, opponents: list[tuple[str, str | None]], episodes: int, seed: int
+) -> dict[str, Any]:
+    """One judged run's predators (at ``checkpoint``) against each opponent (``FleeingPrey`` for
+    None, else the prey of that run folder at its end), by the paper's protocol: per opponent,
+    each predator's mean return as trained, as always-chase and as always-stalk, and the capture
+    rate as trained."""
+    import torch
+
+    from pursuit_bench.agents.kinds import ScriptedAgent
+    from pursuit_bench.rules.policies import FleeingPrey
+    from pursuit_bench.study.robustness import check_opponents
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.evaluate import evaluate_agents
+
+    torch.set_num_threads(1)
+    config, agents, _ = runs.described(Path(predators_from), checkpoint)
+    out: dict[str, Any] = {}
+    for name, prey_from in opponents:
+        protocol = dict(config.protocol)
+        prey: Any
+        if prey_from is None:
+            prey = ScriptedAgent("prey_0", FleeingPrey(obstacles=bool(config.task_options.get("obstacles"))))
+            protocol["prey_epsilon"] = None
+        else:  # read afresh for every evaluation: its exploration draws start from the checkpoint's generators
+            other, theirs, _ = runs.described(Path(prey_from))
+            check_opponents(config, other)
+            prey = theirs["prey_0"]
+        result = evaluate_agents(
+            config.condition,
+            {**{k: v for k, v in agents.items() if k != "prey_0"}, "prey_0": prey},
+            episodes=episodes,
+            seed=seed,
+            prey_check=False,
+            **protocol,
+        )
+        out[name] = {
+            "panels": {p["predator"]: [p["trained"], p["always_chase"], p["always_stalk"]] for p in result["panels"]},
+            "capture_rate": result["capture_rate"],
+        }
+    return out
+
+
+def run(
+    sources: list[dict[str, Any]],
+    budgets: list[int],
+    out: Path,
+    *,
+    pool_seeds: tuple[int, ...],
+    episodes: int,
+    cross_episodes: int,
+    seed: int,
+    workers: int = 1,
+    progress: Callable[[int, int], None] = lambda done, total: None,
+) -> dict[str, Any]:
+    """Every judged run against its pool at every budget, and in cross-kind play; each evaluation
+    kept in ``out/pool-parts/`` as it finishes (a rerun goes on from there). Returns the compact
+    result (:func:`summarise` reads it)."""
+    from pursuit_bench.study.jobs import run_jobs
+
+    layout = plan(sources, pool_seeds)
+    jobs = _jobs(layout, budgets, episodes, cross_episodes, seed)
+    stamp = {"episodes": episodes, "cross_episodes": cross_episodes, "seed": seed}
+    done = run_jobs(jobs, play, out / "pool-parts", stamp, workers=workers, progress=progress)
+    return {
+        "format": FORMAT,
+        **stamp,
+        "budgets": budgets,
+        "pool_seeds": list(pool_seeds),
+        "pools": {c: [FLEEING] + [m["name"] for m in members] for c, members in layout["pools"].items()},
+        "runs": [
+            {
+                **{k: r[k] for k in ("name", "condition", "kind", "seed")},
+                "pool": {str(b): done[f"{r['name']}|{b}"] for b in budgets},
+                "cross": done[f"{r['name']}|cross"],
+            }
+            for r in layout["judged"]
+        ],
+    }
+
+
+def load(path: Path) -> dict[str, Any]:
+    """A compact pool result (pool.json), or ValueError."""
+    try:
+        result = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as error:
+        raise ValueError(f"{path}: not readable as a pool result ({error})") from None
+    if not isinstance(result, dict) or result.get("format") != FORMAT:
+        raise ValueError(f"{path}: not a pursuit-bench pool result (format {FORMAT!r})")
+    return result
+
+
+# --- the judgement -------------------------------------------------------------------------------
+
+
+def pooled(evaluations: dict[str, Any], predator: str) -> dict[str, float]:
+    """One predator's pool return and margin from its evaluations against each opponent."""
+    variants = np.mean([e["panels"][predator] for e in evaluations.values()], axis=0)
+    return {"return": float(variants[0]), "margin": float(variants[0] - max(variants[1], variants[2]))}
+
+
+def _panels(result: dict[str, Any]) -> list[tuple[str, str]]:
+    seen: dict[tuple[str, str], None] = {}
+    for r in result["runs"]:
+        for predator in r["pool"][str(result["budgets"][-1])][FLEEING]["panels"]:
+            seen[(r["condition"], predator)] = None
+    return sorted(seen, key=lambda p: (list(CONDITIONS).index(p[0]), p[1]))
+
+
+def _values(result: dict[str, Any], condition: str, predator: str, kind: str, measure: Callable[[Any], float]) -> Any:
+    runs = sorted(
+        (r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)), key=lambda r: r["seed"]
+    )
+    return np.array([measure(r) for r in runs])
+
+
+def verdict(difference: dict[str, Any], equivalent: dict[str, Any], alpha: float = statistics.ALPHA) -> str:
+    """A panel's verdict from hierarchical minus flat (:func:`statistics.welch_difference` with a
+    Holm-adjusted two-sided ``p_holm``) and its equivalence test (:func:`statistics.equivalence`
+    with ``p_holm``): a significant difference first (two-sided at ``2 alpha``, ``alpha`` a
+    direction), then equivalence within the margin, else not resolved."""
+    if difference["p_holm"] <= 2 * alpha:
+        return "rule helps" if difference["mean"] > 0 else "flat better"
+    if equivalent["p_holm"] <= alpha:
+        return "equivalent"
+    return "not resolved"
+
+
+def compare(
+    rows: list[dict[str, Any]], margin: float = EQUIVALENCE_MARGIN, alpha: float = statistics.ALPHA
+) -> dict[str, int]:
+    """Fill each row (``hierarchical`` and ``flat``: per-run values) with hierarchical minus flat
+    (Welch), the equivalence test, both Holm-adjusted over the rows (one family), and the verdict;
+    returns the verdict counts."""
+    for row in rows:
+        h, f = np.asarray(row["hierarchical"]), np.asarray(row["flat"])
+        row["means"] = {"hierarchical": float(h.mean()), "flat": float(f.mean())}
+        row["difference"] = statistics.welch_difference(h, f)
+        row["equivalence"] = statistics.equivalence(h, f, margin, alpha)
+    for key in ("difference", "equivalence"):
+        for row, adjusted in zip(rows, statistics.holm([r[key]["p"] for r in rows]), strict=True):
+            row[key]["p_holm"] = float(adjusted)
+    for row in rows:
+        row["verdict"] = verdict(row["difference"], row["equivalence"], alpha)
+    return {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
+
+
+def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dict[str, Any]:
+    """Everything the docs quote from a compact pool result: per budget and panel each kind's
+    pool margin and return over runs, hierarchical minus flat with its verdict (Holm over the
+    budget's panels); the probability of improvement at the last budget; learning speed; the
+    cross-kind play per condition."""
+    budgets = [str(b) for b in result["budgets"]]
+    panels = _panels(result)
+
+    def at(budget: str, predator: str, key: str) -> Callable[[Any], float]:
+        return lambda r: pooled(r["pool"][budget], predator)[key]
+
+    by_budget = []
+    for budget in budgets:
+        entry: dict[str, Any] = {"episodes": int(budget)}
+        for key in ("margin", "return"):
+            rows = [
+                {
+                    "condition": c,
+                    "predator": p,
+                    **{k: _values(result, c, p, k, at(budget, p, key)).tolist() for k in KINDS},
+                }
+                for c, p in panels
+            ]
+            entry[key] = {"counts": compare(rows, margin), "panels": rows}
+        by_budget.append(entry)
+    last = by_budget[-1]
+    improvement = {
+        key: statistics.improvement_interval(
+            [np.array(r["hierarchical"]) for r in last[key]["panels"]],
+            [np.array(r["flat"]) for r in last[key]["panels"]],
+        )
+        for key in ("margin", "return")
+    }
+
+    span = np.array([int(b) for b in budgets], dtype=float)
+
+    def area(predator: str) -> Callable[[Any], float]:
+        def measure(r: dict[str, Any]) -> float:
+            curve = [pooled(r["pool"][b], predator)["margin"] for b in budgets]
+            c = np.asarray(curve)  # the trapezoid rule over the budgets, per episode of the span
+            return float(np.sum((c[1:] + c[:-1]) / 2 * np.diff(span)) / (span[-1] - span[0]))
+
+        return measure
+
+    speed = [
+        {"condition": c, "predator": p, **{k: _values(result, c, p, k, area(p)).tolist() for k in KINDS}}
+        for c, p in panels
+    ]
+    speed_counts = compare(speed, margin)
+    return {
+        "episodes": result["episodes"],
+        "cross_episodes": result["cross_episodes"],
+        "seed": result["seed"],
+        "equivalence_margin": margin,
+        "pools": result["pools"],
+        "seeds": {kind: sorted({r["seed"] for r in result["runs"] if r["kind"] == kind}) for kind in KINDS},
+        "budgets": by_budget,
+        "improvement": improvement,
+        "learning_speed": {"counts": speed_counts, "panels": speed},
+        "cross_kind": cross_kind(result),
+        "curves": curves(result),
+    }
+
+
+def _condition_margin(evaluation: dict[str, Any]) -> float:
+    """A run's margin against one prey, mean over the condition's predators."""
+    return float(np.mean([v[0] - max(v[1], v[2]) for v in evaluation["panels"].values()]))
+
+
+def cross_kind(result: dict[str, Any]) -> list[dict[str, Any]]:
+    """Per condition and kind: the margin (mean over predators) against the run's own prey, against
+    the prey of the other kind's run of the same seed, and against the pool, over runs; the
+    change from own prey to the other kind's, paired by run."""
+    rows = []
+    final = str(result["budgets"][-1])
+    for condition in [c for c in CONDITIONS if any(r["condition"] == c for r in result["runs"])]:
+        for kind in KINDS:
+            runs = sorted(
+                (r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)), key=lambda r: r["seed"]
+            )
+            runs = [r for r in runs if "other kind" in r["cross"]]
+            if len(runs) < 2:
+                continue
+            own = np.array([_condition_margin(r["cross"]["own"]) for r in runs])
+            other = np.array([_condition_margin(r["cross"]["other kind"]) for r in runs])
+            pool = np.array(
+                [np.mean([pooled(r["pool"][final], p)["margin"] for p in r["cross"]["own"]["panels"]]) for r in runs]
+            )
+            change = statistics.paired_difference(other, own)
+            rows.append(
+                {
+                    "condition": condition,
+                    "kind": kind,
+                    "runs": len(runs),
+                    "own_prey": {"mean": float(own.mean()), "ci": statistics.t_interval(own)},
+                    "other_kind_prey": {"mean": float(other.mean()), "ci": statistics.t_interval(other)},
+                    "pool": {"mean": float(pool.mean()), "ci": statistics.t_interval(pool)},
+                    "change": {k: change[k] for k in ("mean", "ci", "p_greater", "p_less")},
+                }
+            )
+    return rows
+
+
+def curves(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Per condition and kind: the pool margin (mean over predators) at each budget, mean over
+    runs and t-interval: the efficiency figure."""
+    out: dict[str, dict[str, Any]] = {}
+    budgets = [str(b) for b in result["budgets"]]
+    for condition in [c for c in CONDITIONS if any(r["condition"] == c for r in result["runs"])]:
+        for kind in KINDS:
+            runs = [r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)]
+            matrix = np.array(
+                [
+                    [
+                        np.mean([pooled(r["pool"][b], p)["margin"] for p in r["pool"][b][FLEEING]["panels"]])
+                        for b in budgets
+                    ]
+                    for r in runs
+                ]
+            )
+            out.setdefault(condition, {})[kind] = {
+                "episodes": [int(b) for b in budgets],
+                "mean": matrix.mean(axis=0).tolist(),
+                "ci": [statistics.t_interval(matrix[:, i]) for i in range(len(budgets))],
+            }
+    return out
+
+
+# --- tables --------------------------------------------------------------------------------------
+
+
+def _span(ci: list[float] | None, digits: int = 3) -> str:
+    return f" [{ci[0]:+.{digits}f}, {ci[1]:+.{digits}f}]" if ci else ""
+
+
+def _p(value: float) -> str:
+    return f"{value:.3f}" if value >= 1e-3 else f"{value:.0e}"
+
+
+def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
+    """One budget's panels: each kind's mean ``what`` over runs, hierarchical minus flat with its
+    95 % Welch interval and Holm p, the equivalence test's Holm p and the bound it reaches, and
+    the verdict."""
+    lines = [
+        f"| condition | predator | {what}: hierarchical | flat | hierarchical − flat [95 % Welch] | p (Holm) "
+        "| equivalence p (Holm) | within ± | verdict |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    for r in rows:
+        d, e = r["difference"], r["equivalence"]
+        lines.append(
+            f"| {r['condition']} | {r['predator']} | {r['means']['hierarchical']:+.3f} | {r['means']['flat']:+.3f} "
+            f"| {d['mean']:+.3f}{_span(d['ci'])} | {_p(d['p_holm'])} | {_p(e['p_holm'])} | {e['bound']:.3f} "
+            f"| **{r['verdict']}** |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def counts_markdown(summary: dict[str, Any]) -> str:
+    """The verdict counts at every budget, on the pool margin and on the pool return, and for
+    learning speed."""
+    lines = [
+        "| budget (episodes) | measure | " + " | ".join(VERDICTS) + " |",
+        "|---:|---|" + "---:|" * len(VERDICTS),
+    ]
+    for entry in summary["budgets"]:
+        for key in ("margin", "return"):
+            counts = entry[key]["counts"]
+            lines.append(f"| {entry['episodes']} | pool {key} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
+    counts = summary["learning_speed"]["counts"]
+    lines.append("| all budgets | learning speed | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def improvement_markdown(summary: dict[str, Any]) -> str:
+    """The probability of improvement of the hierarchical predator over the flat one."""
+    lines = ["| compared on | P(hierarchical > flat) [95 % stratified bootstrap] | panels |", "|---|---:|---:|"]
+    budget = summary["budgets"][-1]["episodes"]
+    for key, poi in summary["improvement"].items():
+        low, high = poi["ci"]
+        interval = f"{poi['value']:.2f} [{low:.2f}, {high:.2f}]"
+        lines.append(f"| pool {key}, {budget} episodes | {interval} | {poi['panels']} |")
+    return "\n".join(lines) + "\n"
+
+
+def cross_markdown(rows: list[dict[str, Any]]) -> str:
+    """Cross-kind play: the margin against the run's own prey, the other kind's prey and the pool."""
+    lines = [
+        "| condition | predators | runs | margin against own prey | against the other kind's prey | change "
+        "[95 % t, paired by run] | against the pool |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['condition']} | {r['kind']} | {r['runs']} | {r['own_prey']['mean']:+.3f} "
+            f"| {r['other_kind_prey']['mean']:+.3f} | {r['change']['mean']:+.3f}{_span(r['change']['ci'])} "
+            f"| {r['pool']['mean']:+.3f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def markdown(summary: dict[str, Any]) -> str:
+    """pool.md: every table the docs quote."""
+    final = summary["budgets"][-1]
+    return "\n".join(
+        [
+            "## Verdicts by budget",
+            "",
+            counts_markdown(summary),
+            f"## Panels at {final['episodes']} episodes: the pool margin",
+            "",
+            panels_markdown(final["margin"]["panels"], "pool margin"),
+            f"## Panels at {final['episodes']} episodes: the pool return",
+            "",
+            panels_markdown(final["return"]["panels"], "pool return"),
+            "## Probability of improvement",
+            "",
+            improvement_markdown(summary),
+            "## Learning speed: the pool margin averaged over the budgets",
+            "",
+            panels_markdown(summary["learning_speed"]["panels"], "mean pool margin"),
+            "## Cross-kind play at the end of training",
+            "",
+            cross_markdown(summary["cross_kind"]),
+        ]
+    )
+
+
+def write_report(result: dict[str, Any], out: Path) -> dict[str, Any]:
+    """From a compact pool result: pool-report.json (every figure at full precision), pool.md and
+    pool.png in ``out``; returns the summary."""
+    from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
+    from pursuit_bench.study.plots import pool_png
+
+    summary = summarise(result)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "pool-report.json", json.dumps(summary, indent=2) + "\n")
+    atomic_write_text(out / "pool.md", markdown(summary))
+    atomic_write_bytes(out / "pool.png", pool_png(summary))
+    return summary
