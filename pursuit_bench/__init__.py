@@ -1,7 +1,9 @@
 """pursuit-bench: a predator–prey benchmark for multi-agent RL (Tsutsui, Takeda, Fujii 2023).
 
-``parallel_env(condition=…)`` and ``aec_env(condition=…)`` build the PettingZoo envs (the
-AEC builder is not called ``env`` here: ``pursuit_bench.env`` is the environment's layer);
+``pursuit_v0`` is the PettingZoo environment module (``env()``, ``parallel_env()``,
+``raw_env``, as PettingZoo names them); ``parallel_env(condition=…)`` and
+``aec_env(condition=…)`` are the same builders at the top (the AEC one is not called ``env``
+here: ``pursuit_bench.env`` is the environment's layer);
 ``VectorPursuitEnv`` steps B arenas at once; ``gymnasium.make("pursuit_bench/Pursuit-v0",
 agent=…, condition=…)`` is a single-agent view, and ``gymnasium.make_vec`` with the same
 arguments N of them as one Gymnasium ``VectorEnv`` over the batched core; ``load_agents(RUN)``
@@ -29,6 +31,7 @@ import gymnasium
 from pursuit_bench.env.conditions import CONDITIONS, TaskConfig
 
 if TYPE_CHECKING:
+    from pursuit_bench.env import pursuit_v0
     from pursuit_bench.env.pettingzoo_env import PursuitParallelEnv, parallel_env
     from pursuit_bench.env.pettingzoo_env import env as aec_env
     from pursuit_bench.env.vector import VectorPursuitEnv
@@ -42,6 +45,7 @@ __all__ = [
     "aec_env",
     "load_agents",
     "parallel_env",
+    "pursuit_v0",
 ]
 __version__ = "0.1.0"
 
@@ -62,6 +66,8 @@ _SUBPACKAGES = {"agents", "cli", "env", "io", "pretrained", "rules", "study", "t
 def __getattr__(name: str) -> Any:
     if name in _SUBPACKAGES:
         return importlib.import_module(f"pursuit_bench.{name}")
+    if name == "pursuit_v0":
+        return importlib.import_module("pursuit_bench.env.pursuit_v0")
     if name in _LAZY:
         value = getattr(importlib.import_module(_LAZY[name]), "env" if name == "aec_env" else name)
         globals()[name] = value

@@ -14,6 +14,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from pursuit_bench.agents.config import PAPER, PRESETS, QUICK, AgentConfig
+from pursuit_bench.io.lazy import submodule_getattr
 
 if TYPE_CHECKING:
     from pursuit_bench.agents.dqn import DQNLearner
@@ -57,9 +58,12 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
+def _lazy(name: str) -> Any:
     if name in _LAZY:
         value = getattr(importlib.import_module(f"pursuit_bench.agents.{_LAZY[name]}"), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'pursuit_bench.agents' has no attribute {name!r}")
+
+
+__getattr__ = submodule_getattr(__name__, __path__, _lazy)

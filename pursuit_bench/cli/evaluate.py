@@ -66,8 +66,9 @@ from pursuit_bench.training import runs
     "--opponents",
     metavar="OTHER",
     default=None,
-    help="Held-out opponents: RUN's predators against OTHER's prey (a run folder with as many predators, or "
-    "'scripted' for FleeingPrey), and RUN's prey against OTHER's predators; writes eval-vs-<OTHER>.* unless --tag.",
+    help="Held-out opponents: RUN's predators against OTHER's prey (a run folder with as many predators, "
+    "'pretrained:CONDITION' for a shipped agent's, or 'scripted' for FleeingPrey), and RUN's prey against OTHER's "
+    "predators; writes eval-vs-<OTHER>.* unless --tag.",
 )
 def evaluate(
     run: Path | None,
@@ -97,11 +98,11 @@ def evaluate(
         perturbations = Perturbations.parse(perturb)
     except ValueError as error:
         raise BadInput(str(error)) from None
-    if opponents is not None and opponents != "scripted" and not (Path(opponents) / "config.json").is_file():
-        raise BadInput(f"--opponents {opponents}: expected a run folder (with config.json) or 'scripted'")
+    if opponents is not None:
+        _check_opponents_option(opponents)
     if tag is None:  # the run's own eval.json stays its own
         parts = [*specs, *([f"perturb-{perturbations.tag}"] if perturbations.changed else [])]
-        parts += [f"vs-{Path(opponents).name}"] if opponents is not None else []
+        parts += [f"vs-{Path(opponents.replace(':', '-')).name}"] if opponents is not None else []
         tag = "-".join(parts) or None
     settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
     settings["perturbations"] = perturbations
@@ -113,6 +114,23 @@ def evaluate(
             _evaluate_run(folder, paths, config, trained, about, tag, settings, specs)
     except ValueError as error:  # RunBusy, a bad --agent, …
         raise BadInput(str(error)) from None
+
+
+#: How --opponents names a shipped agent's condition.
+SHIPPED = "pretrained:"
+
+
+def _check_opponents_option(opponents: str) -> None:
+    """Refuse an --opponents value before anything heavy is imported."""
+    from pursuit_bench.env.conditions import CONDITIONS
+
+    if opponents.startswith(SHIPPED):
+        if opponents.removeprefix(SHIPPED) not in CONDITIONS:
+            raise BadInput(f"--opponents {opponents}: expected pretrained:CONDITION, one of {', '.join(CONDITIONS)}")
+    elif opponents != "scripted" and not (Path(opponents) / "config.json").is_file():
+        raise BadInput(
+            f"--opponents {opponents}: expected a run folder (with config.json), pretrained:CONDITION or 'scripted'"
+        )
 
 
 def _held_out(
@@ -133,8 +151,13 @@ def _held_out(
             **about,
             "opponents": {"prey": "FleeingPrey"},
         }
-    other_config, other, _ = runs.described(Path(opponents))
-    check_opponents(config, other_config)
+    if opponents.startswith(SHIPPED):
+        from pursuit_bench import pretrained
+
+        other_config, other, _ = pretrained.described(opponents.removeprefix(SHIPPED))
+    else:
+        other_config, other, _ = runs.described(Path(opponents))
+    check_opponents(config, other_config, mine="the run", theirs=opponents)
     prey_side = evaluate_agents(
         config.condition,
         {**{k: v for k, v in other.items() if k != "prey_0"}, "prey_0": prey},
@@ -149,6 +172,14 @@ def _held_out(
     )
     held_out = {"prey": str(opponents), "prey_side": prey_side}
     return {**agents, "prey_0": other["prey_0"]}, {**about, "opponents": held_out}
+
+
+def _outcomes(check: dict[str, float]) -> str:
+    """A prey's check in words: its return and how its episodes ended."""
+    return (
+        f"return {check['return']:+.3f}, caught {check['captured']:.0%}, left the arena {check['left_area']:.0%}, "
+        f"survived to the time limit {check['survived']:.0%}"
+    )
 
 
 def _agent_specs(values: tuple[str, ...]) -> dict[str, str]:
@@ -212,22 +243,21 @@ def _evaluate_run(
             f"{panel['predator']}: {kind} {panel['trained']:+.3f}  "
             f"always-chase {panel['always_chase']:+.3f}  always-stalk {panel['always_stalk']:+.3f}"
         )
-    side = result.get("opponents", {}).get("prey_side")
+    held_out = result.get("opponents", {})
+    side = held_out.get("prey_side")
     if side is not None:
-        check = side["prey_check"]
-        click.echo(
-            f"the run's prey against {result['opponents']['prey']}'s predators: greedy return "
-            f"{check['learned_greedy']['return']:+.3f} "
-            f"(FleeingPrey in its place {check['fleeing_prey']['return']:+.3f})"
-        )
+        check = side["prey_check"]["learned_greedy"]
+        click.echo(f"the run's own prey against {held_out['prey']}'s predators, greedy: {_outcomes(check)}")
     check = result.get("prey_check")
     if check is not None:
-        who = result["prey_kind"] if result["prey_kind"].startswith("external") else "learned"
+        own = result["prey_kind"] if result["prey_kind"].startswith("external") else "learned"
+        who = f"{held_out['prey']}'s learned prey" if side is not None else f"the run's {own} prey"
         click.echo(
-            f"prey_0 ({who}), greedy: return {check['learned_greedy']['return']:+.3f}, caught "
-            f"{check['learned_greedy']['captured']:.0%} "
-            f"(FleeingPrey in its place: {check['fleeing_prey']['return']:+.3f})"
+            f"prey_0 ({who}), greedy: {_outcomes(check['learned_greedy'])}; "
+            f"FleeingPrey in its place: {_outcomes(check['fleeing_prey'])}"
         )
+    elif held_out.get("prey") == "FleeingPrey":
+        click.echo("prey_0: FleeingPrey (scripted), in the run's prey's place")
     if result.get("perturbations"):
         click.echo("perturbed: " + ", ".join(f"{k}={v:g}" for k, v in result["perturbations"].items()))
     click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")

@@ -3,3 +3,7 @@ rewards, the batched core, the conditions, rendering, the agents' spaces, and it
 (PettingZoo, single-agent Gymnasium, the batched env and Gymnasium's vector env) with the
 perturbation wrapper. Imports only ``io``: everything a benchmark user needs, without the
 training code. The single-agent views are given their scripted opponents (``rules.opponents``)."""
+
+from pursuit_bench.io.lazy import submodule_getattr
+
+__getattr__ = submodule_getattr(__name__, __path__)

@@ -90,17 +90,43 @@ def _described(source: Path | str) -> tuple[Any, dict[str, Any], dict[str, Any]]
     return runs.described(source)
 
 
-def check_opponents(config: Any, other: Any) -> None:
+def check_opponents(config: Any, other: Any, mine: str = "the predators' run", theirs: str = "the prey's run") -> None:
     """ValueError unless agents trained by ``config`` and ``other`` can meet: the same number of
-    predators and the same observation (wall features, obstacles)."""
-    mine, theirs = CONDITIONS[config.condition], CONDITIONS[other.condition]
-    if mine.n_predators != theirs.n_predators:
+    predators and the same observation (wall features, obstacles); the message names what
+    differs and the training options that would match ``theirs``."""
+    ours, others = CONDITIONS[config.condition], CONDITIONS[other.condition]
+    if ours.n_predators != others.n_predators:
         raise ValueError(
-            f"opponents: {config.condition} has {mine.n_predators} predators and {other.condition} "
-            f"{theirs.n_predators}; the prey's observation differs"
+            f"opponents: {mine} ({config.condition}) has {ours.n_predators} predators and {theirs} "
+            f"({other.condition}) {others.n_predators}; the prey's observation differs (train {mine} with "
+            f"--condition {other.condition} to meet {theirs})"
         )
-    if config.agent.wall_features != other.agent.wall_features or config.task_options != other.task_options:
-        raise ValueError("opponents: the two runs' agents observe differently (wall features or obstacles differ)")
+    differ = []
+    if config.agent.wall_features != other.agent.wall_features:
+        flag = "--wall-features" if other.agent.wall_features else "--no-wall-features"
+        on = {True: "on", False: "off"}
+        differ.append(
+            (
+                f"wall features {on[config.agent.wall_features]} in {mine}, {on[other.agent.wall_features]} in "
+                f"{theirs}",
+                flag + (" (the reproduction preset's)" if other.agent.wall_features else ""),
+            )
+        )
+    if config.task_options != other.task_options:
+        wanted = other.task_options.get("obstacles", 0)
+        differ.append(
+            (
+                f"obstacles {config.task_options or 'none'} in {mine}, {other.task_options or 'none'} in {theirs}",
+                f"--obstacles {wanted}"
+                + (f" --obstacle-radius {other.task_options['obstacle_radius']:g}" if wanted else ""),
+            )
+        )
+    if differ:
+        raise ValueError(
+            "opponents: the agents observe differently: "
+            + "; ".join(what for what, _ in differ)
+            + f" (train with {' '.join(option for _, option in differ)} to meet {theirs})"
+        )
 
 
 def _jobs(

@@ -167,6 +167,20 @@ def standard_error(values: np.ndarray) -> float:
     return float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
 
 
+def prey_outcomes(played: Episodes, max_steps: int) -> dict[str, float]:
+    """The prey's (the last agent's) mean return, and the fraction of episodes in which it was
+    caught, left the arena, or survived to the time limit (not caught, nobody out of the arena):
+    the three add to one but for episodes a predator ended by leaving the arena."""
+    caught = played.captured.astype(bool)
+    left = played.left_area.astype(bool)
+    return {
+        "return": float(played.returns[:, -1].mean()),
+        "left_area": float(left[:, -1].mean()),
+        "captured": float(caught.mean()),
+        "survived": float(((played.lengths == max_steps) & ~caught & ~left.any(axis=1)).mean()),
+    }
+
+
 def evaluate_agents(
     condition: str,
     agents: dict[str, Actor],
@@ -244,16 +258,12 @@ def evaluate_agents(
         )
     captured = trained.captured
     checked = None
-    if prey_epsilon is not None and prey_check:  # a learning prey: greedy, and the scripted one in its place
+    scripted_prey = isinstance(agents[prey], ScriptedAgent)  # FleeingPrey put in as a held-out opponent, say
+    if prey_epsilon is not None and prey_check and not scripted_prey:  # a learning prey: greedy, and FleeingPrey
         greedy = play(agents, greedy=True)
         fleeing = play({**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))}, greedy=True)
         checked = {
-            name: {
-                "return": float(played.returns[:, -1].mean()),
-                "left_area": float(played.left_area[:, -1].mean()),
-                "captured": float(played.captured.mean()),
-                "survived": float((played.lengths == CONDITIONS[condition].max_steps).mean()),
-            }
+            name: prey_outcomes(played, CONDITIONS[condition].max_steps)
             for name, played in (("learned_greedy", greedy), ("fleeing_prey", fleeing))
         }
     return {

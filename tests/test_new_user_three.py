@@ -1,0 +1,62 @@
+"""What a new user hit (the third round): the shipped agents as opponents, prey lines that say
+which prey they describe, a prey's outcomes that add up, and mismatches that say what differs."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+from cli_helpers import run_cli
+
+from pursuit_bench import pretrained
+from pursuit_bench.training.evaluate import Episodes, evaluate_agents, prey_outcomes
+
+
+def test_the_shipped_agents_are_opponents_and_every_prey_line_names_its_prey(tmp_path: Path) -> None:
+    out = tmp_path / "shipped"
+    args = ["eval", "--pretrained", "2p-high-shared", "--out", str(out), "--episodes", "20", "--no-record"]
+    code, output = run_cli(*args, "--opponents", "pretrained:2p-high-individual")
+    assert code == 0, output
+    result = json.loads((out / "eval-vs-pretrained-2p-high-individual.json").read_text())
+    assert result["opponents"]["prey"] == "pretrained:2p-high-individual"
+    assert "prey_0 (pretrained:2p-high-individual's learned prey), greedy:" in output
+    assert "the run's own prey against pretrained:2p-high-individual's predators, greedy:" in output
+    code, output = run_cli(*args, "--opponents", "scripted")
+    assert code == 0, output
+    assert "prey_0: FleeingPrey (scripted)" in output and "learned" not in output
+    assert json.loads((out / "eval-vs-scripted.json").read_text())["prey_check"] is None
+    code, output = run_cli(*args, "--opponents", "pretrained:9p-nothing")
+    assert code == 2 and "pretrained:CONDITION, one of 1p-low" in output
+
+
+def test_a_mismatch_says_what_differs_and_how_to_train_a_match(tmp_path: Path) -> None:
+    run = tmp_path / "r"
+    code, output = run_cli("train", "--condition", "1p-high", "--episodes", "2", "--no-record", "--out", str(run))
+    assert code == 0, output
+    code, output = run_cli("eval", str(run), "--episodes", "4", "--no-record", "--opponents", "pretrained:1p-high")
+    assert code == 2, output
+    assert "wall features off in the run, on in pretrained:1p-high" in output
+    assert "train with --wall-features (the reproduction preset's) to meet pretrained:1p-high" in output
+    code, output = run_cli(
+        "eval", str(run), "--episodes", "4", "--no-record", "--opponents", "pretrained:2p-low-shared"
+    )
+    assert code == 2 and "has 1 predators and pretrained:2p-low-shared (2p-low-shared) 2" in output
+
+
+def test_a_prey_s_outcomes_add_up_to_its_episodes() -> None:
+    # four episodes of 300 steps at most: caught on the last step, the prey out, a predator out, the time limit
+    played = Episodes(
+        returns=np.zeros((4, 2)),
+        lengths=np.array([300, 120, 80, 300]),
+        captured=np.array([True, False, False, False]),
+        chase_fraction=np.zeros((4, 1)),
+        distance=np.zeros((4, 2)),
+        left_area=np.array([[False, False], [False, True], [True, False], [False, False]]),
+        collisions=np.zeros((4, 2)),
+        contact_steps=np.zeros((4, 2)),
+    )
+    outcomes = prey_outcomes(played, 300)
+    assert (outcomes["captured"], outcomes["left_area"], outcomes["survived"]) == (0.25, 0.25, 0.25)
+    config, agents, _ = pretrained.described("1p-high")
+    result = evaluate_agents("1p-high", agents, episodes=60, seed=3, **config.protocol)
+    for check in result["prey_check"].values():
+        assert check["captured"] + check["left_area"] + check["survived"] <= 1.0 + 1e-12
