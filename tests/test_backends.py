@@ -34,7 +34,7 @@ def test_terminate_outcomes_identical_and_trajectories_equal() -> None:
         np.testing.assert_array_equal(info_p["episode_length"], info_n["episode_length"])
         np.testing.assert_array_equal(rew_p, rew_n)
         worst = max(worst, float(np.abs(pos_p - pos_n).max()))
-        np.testing.assert_allclose(info_p["final_observation"], info_n["final_observation"], atol=1e-6)  # float32
+        np.testing.assert_allclose(info_p["final_obs"], info_n["final_obs"], atol=1e-6)  # float32
         done = info_p["done"]
         episodes += done.sum()
         captures += info_p["captured"][done].sum()
@@ -83,7 +83,7 @@ def test_batched_env_matches_single_envs_and_autoresets() -> None:
         for i, env in enumerate(singles):
             step_actions = {a: (actions[i, j] if j < 2 else int(actions[i, j, 1])) for j, a in enumerate(env.agents)}
             s_obs, s_rew, s_term, s_trunc, _ = env.step(step_actions)
-            np.testing.assert_allclose(info["final_observation"][i], np.stack(list(s_obs.values())), atol=1e-6)
+            np.testing.assert_allclose(info["final_obs"][i], np.stack(list(s_obs.values())), atol=1e-6)
             np.testing.assert_array_equal(rewards[i], list(s_rew.values()))
             assert term[i, 0] == s_term["prey_0"] and trunc[i, 0] == s_trunc["prey_0"]
             if info["done"][i]:
@@ -91,7 +91,7 @@ def test_batched_env_matches_single_envs_and_autoresets() -> None:
                 assert info["episode_length"][i] <= 12
                 np.testing.assert_allclose(obs[i], np.stack(list(env.reset()[0].values())), atol=1e-6)
             else:
-                np.testing.assert_array_equal(obs[i], info["final_observation"][i])
+                np.testing.assert_array_equal(obs[i], info["final_obs"][i])
     assert finished >= 3
 
 

@@ -32,6 +32,8 @@ def test_a_mismatch_says_what_differs_and_how_to_train_a_match(tmp_path: Path) -
     run = tmp_path / "r"
     code, output = run_cli("train", "--condition", "1p-high", "--episodes", "2", "--no-record", "--out", str(run))
     assert code == 0, output
+    saved = json.loads((run / "config.json").read_text())["train"]
+    assert saved["episodes"] == saved["agent"]["episodes"] == 2  # one training length, the run's
     code, output = run_cli("eval", str(run), "--episodes", "4", "--no-record", "--opponents", "pretrained:1p-high")
     assert code == 2, output
     assert "wall features off in the run, on in pretrained:1p-high" in output
@@ -60,3 +62,29 @@ def test_a_prey_s_outcomes_add_up_to_its_episodes() -> None:
     result = evaluate_agents("1p-high", agents, episodes=60, seed=3, **config.protocol)
     for check in result["prey_check"].values():
         assert check["captured"] + check["left_area"] + check["survived"] <= 1.0 + 1e-12
+
+
+def test_robust_on_an_unreadable_checkpoint_stops_at_once_and_leaves_nothing(tmp_path: Path) -> None:
+    run = tmp_path / "r"
+    code, output = run_cli("train", "--condition", "1p-low", "--episodes", "2", "--no-record", "--out", str(run))
+    assert code == 0, output
+    checkpoint = run / "checkpoint.pt"
+    checkpoint.write_bytes(checkpoint.read_bytes()[:1000])
+    before = sorted(p.name for p in run.iterdir())
+    code, output = run_cli("robust", str(run), "--episodes", "2", "--workers", "2")
+    assert code == 2 and "not a readable pursuit-bench checkpoint (truncated or corrupted)" in output
+    assert "evaluations" not in output and sorted(p.name for p in run.iterdir()) == before
+
+
+def test_the_batched_env_s_action_space_is_what_step_takes() -> None:
+    from pursuit_bench import VectorPursuitEnv
+
+    for continuous in (False, True):
+        env = VectorPursuitEnv(5, "2p-high-shared", continuous=continuous)
+        env.action_space.seed(0)
+        env.reset(seed=0)
+        for _ in range(40):
+            action = env.action_space.sample()
+            assert action.shape == (5, 3, 2)
+            _, _, _, _, info = env.step(action)
+        assert info["final_obs"].shape == (5, 3, env.obs_size)

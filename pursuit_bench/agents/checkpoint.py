@@ -57,6 +57,17 @@ def save(path: str | os.PathLike[str], payload: dict[str, Any]) -> None:
     atomic_write_bytes(path, buffer.getvalue())
 
 
+def _reason(error: Exception) -> str:
+    """torch's complaint in a few words (its own runs to several sentences of advice)."""
+    text = str(error).strip()
+    if "zip archive" in text or isinstance(error, EOFError):
+        return "truncated or corrupted"
+    if "Weights only load failed" in text:
+        return "not a file of tensors torch saved, or corrupted"
+    first = text.splitlines()[0].split(". ")[0] if text else type(error).__name__
+    return first if len(first) <= 80 else first[:77] + "..."
+
+
 def read(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a checkpoint without running any code from it; ``ValueError`` if it is not one."""
     try:
@@ -64,8 +75,7 @@ def read(path: str | os.PathLike[str]) -> dict[str, Any]:
     except FileNotFoundError:
         raise ValueError(f"{path}: no such checkpoint") from None
     except (pickle.UnpicklingError, RuntimeError, EOFError, ValueError, OSError) as error:
-        first_line = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        raise ValueError(f"{path}: not a readable pursuit-bench checkpoint ({first_line})") from None
+        raise ValueError(f"{path}: not a readable pursuit-bench checkpoint ({_reason(error)})") from None
     if not isinstance(payload, dict) or payload.get("format") != FORMAT:
         raise ValueError(f"{path}: not a pursuit-bench checkpoint (format {FORMAT!r} expected)")
     return payload

@@ -53,6 +53,14 @@ def robust(
             raise click.UsageError("several folders go with --out")
         where = out or folders[0]
         sources = [s for folder in folders for s in _sources(folder, None, conditions, seeds)]
+    from pursuit_bench.training import runs
+
+    for source in sources:  # a checkpoint that cannot be read stops the study before any worker starts
+        if isinstance(source["source"], Path):
+            try:
+                runs.load_checkpoint(source["source"])
+            except ValueError as error:
+                raise BadInput(str(error)) from None
     where.mkdir(parents=True, exist_ok=True)
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
     from pursuit_bench.study import robustness

@@ -104,5 +104,5 @@ class PursuitVectorEnv(VectorEnv):
         done = info["done"]
         infos: dict[str, Any] = {}
         if done.any():
-            infos = {"final_obs": np.where(done[:, None], info["final_observation"][:, i], 0.0), "_final_obs": done}
+            infos = {"final_obs": np.where(done[:, None], info["final_obs"][:, i], 0.0), "_final_obs": done}
         return self._obs[:, i], rewards[:, i], terminated[:, i], truncated[:, i], infos

@@ -3,7 +3,7 @@
 Autoreset is *same-step*: when an arena's episode ends on a step, that step's rewards,
 ``terminated`` and ``truncated`` belong to the ended episode, the returned observation is
 already the first of the arena's next episode, and the ended episode's last observation is in
-``info["final_observation"]`` (valid where ``info["done"]``). A learner bootstraps from it, unless
+``info["final_obs"]`` (valid where ``info["done"]``). A learner bootstraps from it, unless
 the arena terminated. Each arena draws its start states from its own generator, spawned from
 the seed given to ``reset``.
 """
@@ -47,7 +47,7 @@ class VectorPursuitEnv:
     (the prey's mode is ignored), or with ``continuous=True`` floats of that shape (each agent's
     acceleration in its line-of-sight frame), and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
     (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
-    with ``done`` (B,), ``final_observation`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
+    with ``done`` (B,), ``final_obs`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
     float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
     (B, n_predators), ``left_area`` (B, n_agents), ``touching_obstacle`` (B, n_agents),
     ``episode_return`` (B, n_agents) and ``episode_length`` (B,) of the episodes that ended.
@@ -57,7 +57,10 @@ class VectorPursuitEnv:
     Spaces: ``single_observation_spaces`` and ``single_action_spaces`` by agent name (those of
     the PettingZoo env), ``observation_spaces`` and ``action_spaces`` the same batched over the
     B arenas (Gymnasium's ``batch_space``); ``observation_space`` is the whole (B, n_agents,
-    6n-2) array ``step`` returns.
+    6n-2) array ``step`` returns and ``action_space`` the whole (B, n_agents, 2) array it takes
+    (``MultiDiscrete`` of (mode, direction), the prey's mode ignored; ``Box(-1, 1)`` when
+    continuous): ``action_space.sample()`` is a valid action. The ended episodes' last
+    observations are in ``info["final_obs"]``, Gymnasium's vector env's name.
 
     The contract beside the ecosystem's: like VMAS, every array is stacked with the arena axis
     first and every arena steps on every call; unlike VMAS (a list per agent) and PettingZoo
@@ -75,6 +78,12 @@ class VectorPursuitEnv:
         self.n_agents = self.config.n_agents
         self.obs_size = task.obs_size(self.n_agents, self.config.obstacles > 0)
         self.observation_space = spaces.Box(-np.inf, np.inf, (num_envs, self.n_agents, self.obs_size), np.float32)
+        shape = (num_envs, self.n_agents, 2)
+        self.action_space: spaces.Space[Any] = (
+            spaces.Box(-1.0, 1.0, shape, np.float64)
+            if self.config.continuous
+            else spaces.MultiDiscrete(np.broadcast_to(np.array([2, task.N_DIRECTIONS]), shape))
+        )
         self.single_observation_spaces, self.single_action_spaces = agent_spaces(self.config)
         self.observation_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_observation_spaces.items()}
         self.action_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_action_spaces.items()}
@@ -144,7 +153,7 @@ class VectorPursuitEnv:
         done = result.terminated | result.truncated
         info: dict[str, Any] = {
             "done": done,
-            "final_observation": result.observations,
+            "final_obs": result.observations,
             "positions": self.core.world.positions.copy(),
             "captured": result.captured,
             "touching_prey": result.contacts.prey,

@@ -34,7 +34,6 @@ def run_jobs(
     by key."""
     from pursuit_bench.io.files import atomic_write_text
 
-    parts.mkdir(parents=True, exist_ok=True)
     done: dict[str, dict[str, Any]] = {}
     for key, _ in jobs:
         path = parts / f"{file_name(key)}.json"
@@ -46,6 +45,7 @@ def run_jobs(
     progress(len(done), len(jobs))
 
     def keep(key: str, result: dict[str, Any]) -> None:
+        parts.mkdir(parents=True, exist_ok=True)  # made with the first result: a failed start leaves no folder
         atomic_write_text(parts / f"{file_name(key)}.json", json.dumps({**stamp, "result": result}) + "\n")
         done[key] = result
         progress(len(done), len(jobs))

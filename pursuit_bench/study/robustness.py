@@ -263,6 +263,10 @@ def markdown(result: dict[str, Any]) -> str:
     summary = result["summary"]
     kinds = sorted({k for c in summary.values() for k in c}, key=lambda k: (k != "hierarchical", k))
     lines = [
+        "Each run's margin over the better of always-chase and always-stalk put in its place (mean over "
+        "its predators), mean over seeds [95 % t-interval], unperturbed and at each perturbation's "
+        "strongest rung:",
+        "",
         "| condition | kind | seeds | unperturbed | "
         + " | ".join(f"{name}={levels[-1]:g}" for name, levels in LADDERS.items())
         + " |",
@@ -278,7 +282,12 @@ def markdown(result: dict[str, Any]) -> str:
                 top = e.get(name, [])
                 cells.append(f"{top[-1]['margin']:+.3f}{span(top[-1]['ci'])}" if top else "–")
             lines.append(f"| {condition} | {kind} | {len(e[NONE]['values'])} | " + " | ".join(cells) + " |")
+    if not result["crossplay"]:
+        return "\n".join([*lines, "", "Cross-play needs two or more seeds of a condition and kind: none here."]) + "\n"
     lines += [
+        "",
+        "Cross-play: each seed's predators against every other seed's prey of the same condition and kind "
+        "(held-out); the gap is self-play minus held-out, paired by the predators' seed:",
         "",
         "| condition | kind | self-play margin | held-out margin | generalisation gap [95 % t-interval] |",
         "|---|---|---:|---:|---:|",
@@ -301,7 +310,11 @@ def chase_markdown(result: dict[str, Any]) -> str:
     entries = [e for by_kind in summary.values() for e in by_kind.values()]
     plain = float(np.mean([e[NONE]["always_chase"] for e in entries]))
     lines = ["| perturbation | " + " | ".join(f"rung {i + 1}" for i in range(3)) + " |", "|---|---:|---:|---:|"]
-    lines.insert(0, f"Always-chase unperturbed: {plain:+.3f}.\n")
+    lines.insert(
+        0,
+        "What each perturbation costs a predator with no learning at all: always-chase's return (mean over "
+        f"predators, runs and conditions) at each rung; unperturbed {plain:+.3f}.\n",
+    )
     for name, levels in LADDERS.items():
         cells = []
         for i, value in enumerate(levels):

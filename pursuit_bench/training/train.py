@@ -408,7 +408,7 @@ class Trainer:
             rows = []
             for r, i in zip(group.runs, group.indices, strict=True):
                 next_obs, rewards, terminated, _, info = steps[r]
-                real_next = np.where(info["done"][:, None], info["final_observation"][:, i], next_obs[:, i])
+                real_next = np.where(info["done"][:, None], info["final_obs"][:, i], next_obs[:, i])
                 rows.append((rewards[:, i], real_next, terminated[:, i]))
             rewards_m, next_m, terminated_m = (np.stack(column) for column in zip(*rows, strict=True))
             group.learner.store(obs, chosen, rewards_m, next_m, terminated_m)

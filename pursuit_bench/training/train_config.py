@@ -56,6 +56,8 @@ class TrainConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"{name}={value!r}: expected an integer >= 1")
+        if self.agent.episodes != self.episodes:  # one training length in config.json, the run's
+            object.__setattr__(self, "agent", self.agent.replace(episodes=self.episodes))
         if self.predator not in ("hierarchical", "flat", "always_chase", "always_stalk"):
             raise ValueError(
                 f"predator={self.predator!r}: expected 'hierarchical', 'flat', 'always_chase' or 'always_stalk'"
