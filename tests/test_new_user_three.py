@@ -88,3 +88,22 @@ def test_the_batched_env_s_action_space_is_what_step_takes() -> None:
             assert action.shape == (5, 3, 2)
             _, _, _, _, info = env.step(action)
         assert info["final_obs"].shape == (5, 3, env.obs_size)
+
+
+def test_the_eta_waits_for_a_tenth_of_the_work_and_follows_the_recent_rate(monkeypatch) -> None:
+    import io
+
+    from pursuit_bench.cli import progress
+
+    clock = [0.0]
+    monkeypatch.setattr(progress.time, "monotonic", lambda: clock[0])
+    log = io.StringIO()
+    bar = progress.Progress("train", 1000, 0, lambda: "", every_episodes=50, file=log, eta=True)
+    for done in range(50, 1001, 50):
+        clock[0] += 1.0 if done <= 100 else 10.0  # short episodes first, then ten times longer ones
+        bar.update(done)
+    lines = log.getvalue().splitlines()
+    assert lines[0].endswith("ETA after 10% | ")  # 50 of 1000
+    # at 500: 5 episodes a second lately, so 500 left take 100 s (the average since the start, 6.1 a
+    # second, would say 82 s)
+    assert "6.1 episodes/s | ETA 00:01:40" in lines[9]

@@ -41,6 +41,23 @@ class Progress:
         self._done = done
         self._start, self._start_done = time.monotonic(), done
         self._last_time, self._last_done = self._start, done
+        self._history: list[tuple[float, int]] = [(self._start, done)]
+
+    #: No ETA before this share of what is left at the start is done: episodes grow longer as the
+    #: agents learn (a prey that survives), so the first episodes' rate promises far too much.
+    ETA_AFTER = 0.1
+
+    def _eta(self) -> str:
+        """The time left at the rate of the most recent tenth of the work (not the average since
+        the start, which early short episodes flatter), or when one will be given."""
+        work = self.total - self._start_done
+        if self._done - self._start_done < self.ETA_AFTER * work:
+            return f"after {self.ETA_AFTER:.0%}"
+        now = self._history[-1][0]
+        window = [(t, d) for t, d in self._history[:-1] if self._done - d <= self.ETA_AFTER * work]
+        t0, d0 = window[0] if window else self._history[-2]
+        rate = (self._done - d0) / max(now - t0, 1e-9)
+        return time.strftime("%H:%M:%S", time.gmtime((self.total - self._done) / rate)) if rate > 0 else "?"
 
     def update(self, done: int) -> None:
         if self._bar is not None:
@@ -54,9 +71,10 @@ class Progress:
 
     def _line(self, now: float) -> None:
         rate = (self._done - self._start_done) / max(now - self._start, 1e-9)
+        self._history.append((now, self._done))
         eta = ""
-        if self.eta and rate > 0:  # by episodes: the ETA of one run (a sweep's describe() gives its own)
-            eta = f" | ETA {time.strftime('%H:%M:%S', time.gmtime((self.total - self._done) / rate))}"
+        if self.eta:  # by episodes: the ETA of one run (a sweep's describe() gives its own)
+            eta = f" | ETA {self._eta()}"
         click.echo(
             f"{self.label}: episode {self._done}/{self.total} ({self._done / self.total:.0%}) | "
             f"{rate:.1f} episodes/s{eta} | {self.describe()}",
