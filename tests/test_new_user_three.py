@@ -107,3 +107,10 @@ def test_the_eta_waits_for_a_tenth_of_the_work_and_follows_the_recent_rate(monke
     # at 500: 5 episodes a second lately, so 500 left take 100 s (the average since the start, 6.1 a
     # second, would say 82 s)
     assert "6.1 episodes/s | ETA 00:01:40" in lines[9]
+
+
+def test_every_refusal_is_one_line_click_s_own_too() -> None:
+    for args in (["eval", "--episodes", "x"], ["nosuch"], ["train", "--condition", "9p"], ["eval"]):
+        code, output = run_cli(*args)
+        assert code == 2 and output.startswith("Error: ") and len(output.strip().splitlines()) == 1, output
+        assert "--help')" in output

@@ -14,6 +14,7 @@ import click
 
 from pursuit_bench.cli.options import (
     BadInput,
+    check_run_folder,
     obstacles_option,
     pretrained_options,
     run_or_pretrained,
@@ -90,10 +91,12 @@ def evaluate(
 
     The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
     the previous ones as they were (exit 130 or 143)."""
+    folder = run_or_pretrained(run, pretrained, out)
+    if pretrained is None:
+        check_run_folder(folder)  # before numba and torch load: a refusal comes at once
+    specs = _agent_specs(agents)
     from pursuit_bench.env.perturbations import Perturbations
 
-    folder = run_or_pretrained(run, pretrained, out)
-    specs = _agent_specs(agents)
     try:
         perturbations = Perturbations.parse(perturb)
     except ValueError as error:

@@ -9,6 +9,9 @@ errors come at once.
 
 from __future__ import annotations
 
+import sys
+from typing import Any
+
 import click
 
 from pursuit_bench.cli.analyze import analyze
@@ -22,7 +25,28 @@ from pursuit_bench.cli.train import train
 from pursuit_bench.cli.view import conditions, view
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+class OneLineErrors(click.Group):
+    """click's group, with every refusal on one line: ``Error: … (see 'pursuit-bench CMD --help')``
+    where click prints its usage, a hint and the error on four (its convention)."""
+
+    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        run: Any = super().main  # click types main() by standalone_mode: one call here serves both
+        if not standalone_mode:
+            return run(*args, standalone_mode=False, **kwargs)
+        try:
+            code = run(*args, standalone_mode=False, **kwargs)
+        except click.ClickException as error:
+            context = getattr(error, "ctx", None)
+            hint = f" (see '{context.command_path} --help')" if isinstance(error, click.UsageError) and context else ""
+            click.echo(f"Error: {error.format_message()}{hint}", err=True)
+            sys.exit(error.exit_code)
+        except click.Abort:
+            click.echo("Aborted!", err=True)
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(package_name="pursuit-bench")
 def main() -> None:
     """pursuit-bench: predators hunt a prey; deep RL picks how hard, parallel navigation where."""

@@ -242,6 +242,16 @@ def run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | None
     return run
 
 
+def check_run_folder(folder: Path) -> None:
+    """BadInput unless ``folder`` is a run folder (a folder with config.json); imports nothing."""
+    if folder.exists() and not folder.is_dir():
+        raise BadInput(f"{folder}: a file, not a run folder")
+    if not folder.is_dir():
+        raise BadInput(f"{folder}: no such run folder")
+    if not (folder / "config.json").is_file():
+        raise BadInput(f"{folder}: not a pursuit-bench run folder (no config.json)")
+
+
 @contextlib.contextmanager
 def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
     """Hold ``folder``'s lock: a RUN (checked to be one before a lock file is made in it), or the
@@ -251,12 +261,7 @@ def locked(folder: Path, pretrained: str | None) -> Iterator[None]:
 
     made = False
     if pretrained is None:
-        if folder.exists() and not folder.is_dir():
-            raise BadInput(f"{folder}: a file, not a run folder")
-        if not folder.is_dir():
-            raise BadInput(f"{folder}: no such run folder")
-        if not (folder / "config.json").is_file():
-            raise BadInput(f"{folder}: not a pursuit-bench run folder (no config.json)")
+        check_run_folder(folder)
     else:
         made = not folder.exists()
         folder.mkdir(parents=True, exist_ok=True)

@@ -51,6 +51,9 @@ def pool(
     OUT` rewrites the report from pool.json."""
     import os
 
+    for where in sweeps:  # before anything heavy is imported (training.sweep brings torch): a refusal comes at once
+        if not (where / "sweep.json").is_file():
+            raise BadInput(f"{where}: not a sweep folder (no sweep.json)")
     from pursuit_bench.io.files import atomic_write_text
     from pursuit_bench.study import pool as pools
 
@@ -95,8 +98,6 @@ def _sources(sweeps: tuple[Path, ...]) -> tuple[list[dict[str, Any]], list[int],
     budgets: list[int] | None = None
     seeds: set[int] = set()
     for where in sweeps:
-        if not (where / PLAN).is_file():
-            raise BadInput(f"{where}: not a sweep folder (no {PLAN})")
         plan = SweepPlan.from_dict(json.loads((where / PLAN).read_text())["plan"])
         mine = sorted({*plan.keep_checkpoints, plan.episodes})
         if budgets is not None and mine != budgets:

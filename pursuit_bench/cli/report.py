@@ -22,6 +22,8 @@ def report(where: Path, out: Path | None) -> None:
     panels' verdicts, paired differences, per-seed counts, power), fig2.png, forest.png,
     counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary.
     On a pool study's folder (pool.json, from `pursuit-bench pool`): pool-report.json, pool.md, pool.png."""
+    if not where.is_dir():  # before the statistics and the figures are imported: a refusal comes at once
+        raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
     from pursuit_bench.study import report as reports
 
     if out is not None and out.exists() and not out.is_dir():

@@ -236,10 +236,10 @@ def train(
     out.mkdir(parents=True, exist_ok=True)
     try:
         with SignalCatcher(raise_at_once=False).active() as signals, runs.locked(out):
+            state = _prepare_folder(out, config, settings, resume, force)  # refusals before torch loads
             import torch
 
             torch.set_num_threads(threads)
-            state = _prepare_folder(out, config, settings, resume, force)
             if note:
                 click.echo(f"{out}: {note}", err=True)
             _train_run(out, config, settings, state, signals, record=not no_record, log_every=log_every)
