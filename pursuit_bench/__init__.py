@@ -21,9 +21,10 @@ import importlib
 import os
 from typing import TYPE_CHECKING, Any
 
-# MKL picks its matrix kernels by CPU, and training's bits follow its pick (MKL_CBWR=COMPATIBLE
-# changes them; README, "the main job"): pinned to its AVX2 path, the same on every x86 CPU
-# since 2013, unless the user set it. MKL reads this when first used: before torch is.
+# MKL picks its matrix kernels by CPU, and evaluations' bits follow its pick (MKL_CBWR=COMPATIBLE
+# changes them; docs/departures.md, "Reproducibility across machines"): pinned to its AVX2 path,
+# the same on every x86 CPU since 2013, unless the user set it. MKL reads this when first used:
+# before torch is.
 os.environ.setdefault("MKL_CBWR", "AVX2")
 
 import gymnasium

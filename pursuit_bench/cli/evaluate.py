@@ -253,8 +253,14 @@ def _evaluate_run(
         click.echo(f"the run's own prey against {held_out['prey']}'s predators, greedy: {_outcomes(check)}")
     check = result.get("prey_check")
     if check is not None:
-        own = result["prey_kind"] if result["prey_kind"].startswith("external") else "learned"
-        who = f"{held_out['prey']}'s learned prey" if side is not None else f"the run's {own} prey"
+        external = result["prey_kind"].startswith("external")
+        who = (
+            result["prey_kind"]
+            if external
+            else f"{held_out['prey']}'s learned prey"
+            if side is not None
+            else "the run's learned prey"
+        )
         click.echo(
             f"prey_0 ({who}), greedy: {_outcomes(check['learned_greedy'])}; "
             f"FleeingPrey in its place: {_outcomes(check['fleeing_prey'])}"
