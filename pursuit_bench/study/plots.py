@@ -8,6 +8,7 @@ from typing import Any
 import matplotlib
 
 matplotlib.use("Agg")  # files only: no display needed
+import matplotlib.lines
 import matplotlib.pyplot as plt
 import matplotlib.ticker
 import numpy as np
@@ -22,10 +23,11 @@ def reward_bars_png(result: dict[str, Any], run: str | None = None) -> bytes:
     (``run``, or the shipped agents' condition and seed) and the evaluation."""
     panels = result["panels"]
     bars = (("trained", result.get("predator_kind", "trained"), TRAINED_COLOR), *BASELINES)
-    fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels) + 0.8, 3.6), squeeze=False, sharey=True)
+    width = max(3.2 * len(panels) + 0.8, 5.2)  # room for the two-line title over one panel
+    fig, axes = plt.subplots(1, len(panels), figsize=(width, 3.6), squeeze=False, sharey=True)
     low = min(min(p[k] - p["stderr"][k] for k, _, _ in bars) for p in panels)
     high = max(max(p[k] + p["stderr"][k] for k, _, _ in bars) for p in panels)
-    margin = 0.18 * max(high - low, 0.1)
+    margin = 0.25 * max(high - low, 0.1)
     for ax, panel in zip(axes[0], panels, strict=True):
         values = [panel[key] for key, _, _ in bars]
         errors = [panel["stderr"][key] for key, _, _ in bars]
@@ -35,8 +37,16 @@ def reward_bars_png(result: dict[str, Any], run: str | None = None) -> bytes:
         ax.set_title(panel["predator"])
         ax.tick_params(axis="x", labelrotation=20)
         for x, (v, e) in enumerate(zip(values, errors, strict=True)):
-            y = v + e if v >= 0 else v - e
-            ax.annotate(f"{v:+.2f}", (x, y), ha="center", va="bottom" if v >= 0 else "top", fontsize=8)
+            y = v + e if v >= 0 else v - e  # beyond the error bar's end, moved off it by a few points
+            ax.annotate(
+                f"{v:+.2f}",
+                (x, y),
+                xytext=(0, 3 if v >= 0 else -3),
+                textcoords="offset points",
+                ha="center",
+                va="bottom" if v >= 0 else "top",
+                fontsize=8,
+            )
         ax.set_ylim(min(low, 0.0) - margin, max(high, 0.0) + margin)
     axes[0][0].set_ylabel("mean cumulative reward (± s.e.)")
     shipped = result.get("pretrained")
@@ -111,8 +121,13 @@ def fig2_png(table: list[dict[str, Any]]) -> bytes:
             ax.set_title(f"{condition} · {entries[col]['predator']}", fontsize=9)
             ax.tick_params(axis="y", labelsize=7)
         axes[row][0].set_ylabel("mean return", fontsize=8)
-    seeds = max(len(v["values"]) for t in table for v in t["variants"].values())
-    fig.suptitle(f"Mean return per predator over {seeds} seeds\n{interval_words(seeds)}; dots: seeds", fontsize=10)
+    present = [n for n in LABELS if any(n in t["variants"] for t in table)]
+    per_variant = {n: max(len(t["variants"][n]["values"]) for t in table if n in t["variants"]) for n in present}
+    seeds = max(per_variant.values())
+    fewer = [f"{LABELS[n]} {k}" for n, k in per_variant.items() if k != seeds]
+    over = f"{seeds} seeds" + (f" ({', '.join(fewer)})" if fewer else "")
+    words = "95 % t-interval over seeds" if seeds >= 2 else interval_words(seeds)
+    fig.suptitle(f"Mean return per predator over {over}\n{words}; dots: seeds", fontsize=10)
     fig.tight_layout()
     return _png(fig)
 
@@ -126,19 +141,17 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     rows = -(-len(conditions) // columns)
     fig, axes = plt.subplots(2 * rows, columns, figsize=(max(3.4 * columns, 5.6), 4.6 * rows + 0.6), squeeze=False)
     styles = {"hierarchical": "-", "flat": "--"}
-    agent_colors = plt.get_cmap("tab10")
     kinds = sorted({kind for c in curves.values() for kind in c})
     seeds = max((curve.get("seeds", 0) for c in curves.values() for curve in c.values()), default=0)
     for i, condition in enumerate(conditions):
         top, bottom = axes[2 * (i // columns)][i % columns], axes[2 * (i // columns) + 1][i % columns]
         for kind, curve in curves[condition].items():
             x = curve["episodes"]
-            for j, (label, series) in enumerate(curve["series"].items()):
+            for label, series in curve["series"].items():
                 ax = bottom if label == "capture_rate" else top
-                color = "black" if label == "capture_rate" else agent_colors(j)
                 name = label.removeprefix("return/")
-                shown = name if name.startswith("prey") or len(kinds) == 1 else f"{name} ({kind} predators)"
-                ax.plot(x, series["mean"], styles.get(kind, ":"), color=color, lw=1.2, label=shown)
+                color = "black" if label == "capture_rate" else agent_color(name)
+                ax.plot(x, series["mean"], styles.get(kind, ":"), color=color, lw=1.2)
                 if series["ci"] is not None:
                     ax.fill_between(x, series["ci"][0], series["ci"][1], color=color, alpha=0.15, lw=0)
         top.set_title(condition, fontsize=9)
@@ -148,7 +161,6 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
         bottom.set_ylim(-0.03, 1.03)  # a rate of 1.0 stays inside the frame
         for ax in (top, bottom):
             ax.tick_params(labelsize=7)
-        top.legend(fontsize=6, loc="lower right")
     for j in range(len(conditions), rows * columns):
         axes[2 * (j // columns)][j % columns].set_visible(False)
         axes[2 * (j // columns) + 1][j % columns].set_visible(False)
@@ -165,8 +177,22 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
             f"{'solid' if k == 'hierarchical' else 'dashed'}: {k}" for k in kinds if k in styles
         )
     fig.suptitle(heading, fontsize=10)
-    fig.tight_layout()
+    names = sorted({k.removeprefix("return/") for c in curves.values() for v in c.values() for k in v["series"]})
+    handles = [matplotlib.lines.Line2D([], [], color=agent_color(n), label=n) for n in names if n != "capture_rate"]
+    handles += [matplotlib.lines.Line2D([], [], color="black", label="capture rate")]
+    if len(kinds) > 1:  # the line style says the predators' kind (the prey's too: it trained against them)
+        handles += [
+            matplotlib.lines.Line2D([], [], color="grey", ls=styles.get(k, ":"), label=f"{k} runs") for k in kinds
+        ]
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.35 / fig.get_figheight(), 1, 1))  # the legend's row at the bottom
     return _png(fig)
+
+
+def agent_color(name: str) -> Any:
+    """An agent's colour in the learning curves: predator_k the k-th of tab10, the prey red."""
+    palette = plt.get_cmap("tab10")
+    return palette(3) if name.startswith("prey") else palette(int(name.rsplit("_", 1)[-1]) % 3)
 
 
 def fig3_png(analysis: dict[str, Any], embeddings: dict[str, Any], closest: dict[str, Any], title: str = "") -> bytes:
@@ -284,7 +310,7 @@ def budget_png(rows: list[dict[str, Any]]) -> bytes:
     ax.axhline(16, color="grey", lw=0.8, ls="-.")
     ax.annotate("paper, one seed: 16", (episodes[0], 16), xytext=(3, 3), textcoords="offset points", fontsize=8)
     ax.set_xscale("log")
-    ax.set_xticks(episodes, [str(e) for e in episodes])
+    ax.set_xticks(episodes, [f"{e / 1000:g}k" for e in episodes], rotation=45, fontsize=8)
     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_ylim(0, panels + 0.5)
     ax.set_xlabel("training episodes per run")
@@ -363,11 +389,12 @@ def counts_png(counts: dict[str, Any]) -> bytes:
     if counts["ci"]:
         ax.axvspan(*counts["ci"], color="black", alpha=0.12, lw=0, label="95 % t-interval of the mean")
     ax.axvline(counts["paper"], color="#c44e52", ls="--", lw=1.2, label=f"paper (one seed): {counts['paper']}")
-    ax.set_xlim(-0.5, counts["panels"] + 0.5)
+    ax.set_xlim(-0.5, max(counts["panels"], counts["paper"]) + 0.5)  # the paper's count stays in view
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel(f"panels where the hierarchical predator beats both baselines (of {counts['panels']})", fontsize=8)
     ax.set_ylabel("seeds")
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="best")
     ax.set_title("The paper's strict count, counted on each seed alone", fontsize=10)
     fig.tight_layout()
     return _png(fig)
@@ -479,7 +506,7 @@ def robust_png(result: dict[str, Any]) -> bytes:
     columns = 4 if alone else len(conditions)
     ladder_rows = -(-len(ladders) // 4) if alone else len(ladders)
     rows = ladder_rows + (1 if crossplay else 0)
-    heights = [1.0] * ladder_rows + ([1.4] if crossplay else [])
+    heights = [1.0] * ladder_rows + ([1.3] if crossplay else [])
     fig = plt.figure(figsize=(max(3.3 * columns + 0.6, 9.0), 2.1 * sum(heights) + 1.2))
     grid = fig.add_gridspec(rows, columns, height_ratios=heights)
     for col, condition in enumerate(conditions):
@@ -511,22 +538,24 @@ def robust_png(result: dict[str, Any]) -> bytes:
             if k == 0 and col == 0:
                 ax.legend(fontsize=6, loc="best")
         if crossplay and condition in crossplay:
-            cells = grid[ladder_rows, col].subgridspec(1, len(crossplay[condition]), wspace=0.5)
+            cells = grid[ladder_rows, col].subgridspec(1, len(crossplay[condition]), wspace=0.9)
             for k, (kind, c) in enumerate(crossplay[condition].items()):
                 ax = fig.add_subplot(cells[0, k])
                 matrix = np.array(c["matrix"])
                 bound = max(abs(matrix).max(), 1e-6)
-                image = ax.imshow(matrix, cmap="RdBu", vmin=-bound, vmax=bound)
+                image = ax.imshow(matrix, cmap="RdBu", vmin=-bound, vmax=bound, aspect="auto")  # fills its cell
                 seeds = c["seeds"]
                 ax.set_xticks(range(len(seeds)), seeds, fontsize=6)
                 ax.set_yticks(range(len(seeds)), seeds, fontsize=6)
                 ax.set_xlabel("prey's seed", fontsize=7)
                 ax.set_ylabel("predators' seed", fontsize=7)
                 ax.set_title(f"{kind}: gap {c['gap']['mean']:+.2f}", fontsize=7)
-                fig.colorbar(image, ax=ax, fraction=0.046, pad=0.03).ax.tick_params(labelsize=5)
+                bar = fig.colorbar(image, ax=ax, fraction=0.046, pad=0.04)
+                bar.ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
+                bar.ax.tick_params(labelsize=6)
     seeds = max((len(e["none"]["values"]) for c in summary.values() for e in c.values()), default=0)
     fig.suptitle(
-        f"Margin over the better baseline under perturbations (mean over {seeds} seeds, 95 % t-interval; "
+        f"Margin over the better baseline under perturbations ({interval_words(seeds)}; "
         f"{result['episodes']} episodes per variant)"
         + (
             "\nbottom: cross-play margins, diagonal = self-play; gap = self-play minus held-out margin"
@@ -535,7 +564,8 @@ def robust_png(result: dict[str, Any]) -> bytes:
         ),
         fontsize=9,
     )
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.9 / fig.get_figheight()))  # the two-line title keeps its room
+    title = 0.9 if crossplay else 0.5  # inches kept for the title: two lines with cross-play, else one
+    fig.tight_layout(rect=(0, 0, 1, 1 - title / fig.get_figheight()))
     return _png(fig)
 
 
@@ -560,7 +590,7 @@ def pool_png(summary: dict[str, Any]) -> bytes:
                 ax.fill_between(x, low, high, color=colors[kind], alpha=0.2, lw=0)
         ax.axhline(0.0, color="black", lw=0.6)
         ax.set_xscale("log")
-        ax.set_xticks(x, [f"{e / 1000:g}k" for e in x], fontsize=7)
+        ax.set_xticks(x, [f"{e / 1000:g}k" for e in x], fontsize=7, rotation=45)
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.tick_params(axis="y", labelsize=7)
         ax.set_title(conditions[i], fontsize=9)
