@@ -145,3 +145,23 @@ def test_pool_on_a_tiny_sweep_judges_both_kinds_against_the_same_opponents(tmp_p
         assert name == "pool.json" or (tmp_path / "again" / name).read_bytes() == data, name
     code, output = run_cli("pool", str(sweep), "--out", str(out), "--pool-seeds", "7")
     assert code == 2 and "--pool-seeds: [7] not among" in output
+
+
+def test_reproduction_md_prints_what_the_committed_pool_results_give(tmp_path: Path) -> None:
+    root = Path(__file__).resolve().parents[1]
+    result = pool.load(root / "results" / "pool" / "pool.json")
+    summary = pool.summarise(result)
+    text = (root / "REPRODUCTION.md").read_text()
+    for table in pool.markdown(summary).split("\n## ")[1:]:  # every table under its heading
+        body = table.split("\n", 2)[2].strip()
+        assert body in text, table.splitlines()[0]
+    judged = {(r["condition"], r["kind"], r["seed"]) for r in result["runs"]}  # no pool prey is a judged run's
+    for condition, members in result["pools"].items():
+        assert members[0] == pool.FLEEING
+        for member in members[1:]:
+            kind, seed = member.removeprefix(condition + "-").rsplit("-seed", 1)
+            assert (condition, kind, int(seed)) not in judged
+    code, output = run_cli("report", str(root / "results" / "pool"), "--out", str(tmp_path))
+    assert code == 0, output
+    assert (tmp_path / "pool.md").read_text() == (root / "docs" / "figures" / "pool" / "pool.md").read_text()
+    assert (tmp_path / "pool.png").read_bytes() == (root / "docs" / "figures" / "pool" / "pool.png").read_bytes()

@@ -130,6 +130,7 @@ def play(
         )
         out[name] = {
             "panels": {p["predator"]: [p["trained"], p["always_chase"], p["always_stalk"]] for p in result["panels"]},
+            "stderr": {p["predator"]: p["stderr"]["trained"] for p in result["panels"]},
             "capture_rate": result["capture_rate"],
         }
     return out
@@ -290,6 +291,7 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
     speed_counts = compare(speed, margin)
     return {
         "episodes": result["episodes"],
+        "episode_noise": episode_noise(result),
         "cross_episodes": result["cross_episodes"],
         "seed": result["seed"],
         "equivalence_margin": margin,
@@ -301,6 +303,29 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
         "cross_kind": cross_kind(result),
         "curves": curves(result),
     }
+
+
+def episode_noise(result: dict[str, Any]) -> dict[str, Any]:
+    """How much of the spread of the pool return over runs the evaluation's episodes make, at the
+    last budget: per panel and kind, the mean squared standard error of a run's pool return (its
+    opponents' standard errors combined) over the variance of the pool return between runs; the
+    median and largest share over panels and kinds."""
+    final = str(result["budgets"][-1])
+    shares = []
+    for condition, predator in _panels(result):
+        for kind in KINDS:
+            runs = [r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)]
+            pooled_returns = np.array([pooled(r["pool"][final], predator)["return"] for r in runs])
+            errors = np.array(
+                [
+                    np.sqrt(sum(e["stderr"][predator] ** 2 for e in r["pool"][final].values())) / len(r["pool"][final])
+                    for r in runs
+                ]
+            )
+            between = pooled_returns.var(ddof=1)
+            if between > 0:
+                shares.append(float(np.mean(errors**2) / between))
+    return {"median_share": float(np.median(shares)), "largest_share": float(np.max(shares)), "cells": len(shares)}
 
 
 def _condition_margin(evaluation: dict[str, Any]) -> float:
@@ -443,11 +468,16 @@ def cross_markdown(rows: list[dict[str, Any]]) -> str:
 def markdown(summary: dict[str, Any]) -> str:
     """pool.md: every table the docs quote."""
     final = summary["budgets"][-1]
+    noise = summary["episode_noise"]
     return "\n".join(
         [
             "## Verdicts by budget",
             "",
             counts_markdown(summary),
+            f"The evaluation's episodes make {noise['median_share']:.0%} of the variance of the pool return over "
+            f"runs at {final['episodes']} episodes (median over panels and kinds; at most "
+            f"{noise['largest_share']:.0%}): the runs' spread is what the intervals measure.",
+            "",
             f"## Panels at {final['episodes']} episodes: the pool margin",
             "",
             panels_markdown(final["margin"]["panels"], "pool margin"),
