@@ -97,7 +97,9 @@ def build_agents(
             agents[prey] = ScriptedAgent(prey, FleeingPrey(obstacles=config.obstacles > 0))
         for kind, name in learning:
             alone = () if config.batched_learners or kind.kind == "prey" else (r, name)
-            key = (kind.kind, n_obs[r], config.agent, config.num_envs, *alone)
+            # the training length (agent.episodes, the run's) is no learner's hyper-parameter: runs of
+            # other lengths stack, and leave the stack as they finish
+            key = (kind.kind, n_obs[r], config.agent.replace(episodes=1), config.num_envs, *alone)
             kinds[key] = kind
             plans.setdefault(key, []).append((r, names.index(name), name))
         runs_agents.append(agents)
