@@ -50,6 +50,7 @@ def test_agent_kinds_map_choices_to_env_actions() -> None:
     assert scripted.act_batch(obs).shape == (32, 2) and (scripted.act_batch(obs)[:, 0] == 1).all()
 
 
+@pytest.mark.slow
 def test_hierarchical_predator_learns_to_beat_always_chase() -> None:
     config = TrainConfig(condition="1p-high", prey="scripted", episodes=250, num_envs=8, seed=0)
     trainer = Trainer(config)

@@ -13,6 +13,7 @@ from pursuit_bench.study.analysis import DISTANCE_BINS, chase_by_distance, embed
 TINY = ["--episodes", "12", "--num-envs", "4", "--learning-starts", "32", "--batch-size", "16", "--no-record"]
 
 
+@pytest.mark.slow
 def test_analyze_a_run_writes_four_files_that_agree_with_its_states(tmp_path: Path) -> None:
     out = tmp_path / "run"
     code, output = run_cli("train", "--condition", "2p-high-individual", "--out", str(out), *TINY)
@@ -39,6 +40,7 @@ def test_analyze_a_run_writes_four_files_that_agree_with_its_states(tmp_path: Pa
     assert {"/embedding/states", "/embedding/current", "/arena/agents/predator_0", "/arena/agents/prey_0"} <= paths
 
 
+@pytest.mark.slow
 def test_the_organisation_score_sees_structure_and_not_its_absence() -> None:
     rng = np.random.default_rng(0)
     distance = rng.uniform(0.1, 2.0, 600)

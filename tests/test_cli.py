@@ -129,6 +129,7 @@ def test_bad_run_folders(tmp_path: Path) -> None:
     assert json.loads((out / "config.json").read_text())["train"]["condition"] == "1p-low"
 
 
+@pytest.mark.slow
 def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
     args = ["train", "--condition", "1p-low", "--out", str(out), "--episodes", "400", "--num-envs", "4"]
@@ -147,6 +148,7 @@ def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path, proce
     assert (out / "train.resume1.rrd").exists()
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
     process = processes(
@@ -167,6 +169,7 @@ def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: 
     assert code == 0, output  # the checkpoint written on Ctrl-C loads
 
 
+@pytest.mark.slow
 def test_a_training_log_line_has_an_eta(tmp_path: Path) -> None:
     command = cli_command("train", "--condition", "1p-low", "--out", str(tmp_path / "r"), *TINY, "--no-record")
     done = subprocess.run([*command, "--log-every", "4"], capture_output=True, text=True, timeout=300)

@@ -216,6 +216,7 @@ def test_pettingzoo_s_versioned_module() -> None:
     assert pursuit_v0.env is pursuit_bench.aec_env and pursuit_v0.parallel_env is pursuit_bench.parallel_env
 
 
+@pytest.mark.slow
 def test_importing_the_package_pins_mkls_code_path_unless_set() -> None:
     code = "import os, pursuit_bench, torch; torch.ones(3, 3) @ torch.ones(3, 3); print(os.environ['MKL_CBWR'])"
     env = {k: v for k, v in os.environ.items() if k != "MKL_CBWR"}

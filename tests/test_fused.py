@@ -99,6 +99,7 @@ def test_decisions_are_torchs_even_where_actions_tie() -> None:
     assert np.array_equal(tied, everyone_tied)  # torch's own values, bit for bit
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("condition", ["1p-high", "3p-high-shared"])
 def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """The paper's protocol on the shipped agents, played with the compiled forward pass, gives the

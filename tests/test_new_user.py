@@ -85,6 +85,7 @@ def test_a_repeated_agent_is_refused_and_an_outside_prey_is_named(tmp_path: Path
     assert "prey_0 (external (user_agents:away_prey)), greedy" in output
 
 
+@pytest.mark.slow
 def test_an_outside_agent_is_imported_from_the_working_directory(tmp_path: Path) -> None:
     (tmp_path / "user_agents.py").write_text(AGENTS)
     command = cli_command(

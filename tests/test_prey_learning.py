@@ -1,6 +1,7 @@
 """The prey learns: against a fixed always-stalk predator its training return rises."""
 
 import numpy as np
+import pytest
 
 from pursuit_bench.agents.config import QUICK
 from pursuit_bench.training.train import EpisodeRecord, TrainConfig, Trainer
@@ -10,6 +11,7 @@ from pursuit_bench.training.train import EpisodeRecord, TrainConfig, Trainer
 MARGIN = 0.2
 
 
+@pytest.mark.slow
 def test_the_prey_learns_to_survive_a_fixed_stalker(one_thread) -> None:
     config = TrainConfig(
         condition="1p-high",

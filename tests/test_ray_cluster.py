@@ -84,6 +84,7 @@ def same_runs(a: Path, b: Path, names: list[str]) -> None:
             assert left_text == right_text, (name, file)
 
 
+@pytest.mark.slow
 def test_the_ray_backend_gives_the_local_backends_results(tmp_path: Path, loopback) -> None:
     sweep = [sys.executable, "-m", "pursuit_bench.cli.main", "sweep", *SMALL, "--workers", "2"]
     done = loopback(f"{' '.join(sweep)} --backend ray --out {tmp_path / 'ray'}", 600)
@@ -93,6 +94,7 @@ def test_the_ray_backend_gives_the_local_backends_results(tmp_path: Path, loopba
     same_runs(tmp_path / "ray", tmp_path / "local", [f"1p-low-hierarchical-seed{s}" for s in (0, 1)])
 
 
+@pytest.mark.slow
 def test_a_sweep_on_two_nodes_survives_losing_one(tmp_path: Path, loopback) -> None:
     """A head and a second node (each its own raylet, one CPU each) share a token; the sweep's
     two stacks run one on each; the second node is killed while its task runs; the task is

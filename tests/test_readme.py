@@ -8,6 +8,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
 from cli_helpers import run_cli
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
@@ -41,6 +42,7 @@ def python_blocks() -> list[str]:
     return [textwrap.dedent("\n".join(line[len(indent) :] for line in body.splitlines())) for indent, body in blocks]
 
 
+@pytest.mark.slow
 def test_every_python_block_of_the_readme_runs_as_written_in_a_fresh_interpreter(tmp_path: Path) -> None:
     code, output = run_cli(
         "train", "--condition", "1p-high", "--episodes", "2", "--no-record", "--out", str(tmp_path / "runs" / "demo")

@@ -127,6 +127,7 @@ def test_a_second_process_cannot_use_a_busy_folder(tmp_path: Path) -> None:
     assert code == 0, output  # released
 
 
+@pytest.mark.slow
 def test_interrupted_eval_keeps_the_previous_results_and_tags_keep_apart(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
     train_tiny(out, "--no-record")
@@ -226,6 +227,7 @@ def test_the_cli_starts_without_torch_or_rerun(command: list[str]) -> None:
     assert result.stdout.strip().splitlines()[-1] == "[]", result.stdout + result.stderr
 
 
+@pytest.mark.slow
 def test_sigterm_at_any_moment_of_eval_leaves_old_files_or_complete_new_ones(tmp_path: Path, processes) -> None:
     """SIGTERM sent at many moments of an evaluation, whatever call it lands in (Rerun's
     included): either exit 143 with the previous files untouched, or exit 0 with a complete new

@@ -9,6 +9,8 @@ import sys
 import zipfile
 from pathlib import Path
 
+import pytest
+
 import pursuit_bench
 from pursuit_bench import pretrained
 from pursuit_bench.env.conditions import CONDITIONS
@@ -34,6 +36,7 @@ def test_every_condition_is_shipped_small_and_acts() -> None:
             obs, *_ = env.step({name: agents[name].act(obs[name]) for name in env.agents})
 
 
+@pytest.mark.slow
 def test_a_non_editable_install_carries_the_weights(tmp_path: Path) -> None:
     """Build the wheel, install it (not editable) into a folder of its own and load from there."""
     repo = Path(__file__).resolve().parents[1]

@@ -23,6 +23,7 @@ def episodes_of(folder: Path) -> list[int]:
     return [json.loads(line)["episode"] for line in (folder / "metrics.jsonl").read_text().splitlines()]
 
 
+@pytest.mark.slow
 def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alone(tmp_path: Path) -> None:
     out = tmp_path / "sweep"
     code, output = run_cli(*SWEEP, "--out", str(out))
@@ -96,6 +97,7 @@ def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alon
     assert all(len(a["p_chase"]) == 20 for a in analysis.values()) and (out / "modes.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path, processes) -> None:
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "pursuit_bench.cli.main", *SWEEP, "--episodes", "120", "--out", str(out)]
@@ -166,6 +168,7 @@ def test_stacks_are_planned_by_expected_cost() -> None:
     )
 
 
+@pytest.mark.slow
 def test_kept_checkpoints_are_evaluated_like_the_final_one(tmp_path: Path) -> None:
     out = tmp_path / "s"
     command = ["sweep", "--conditions", "1p-low", "--seeds", "1", "--episodes", "16", "--eval-episodes", "8"]
@@ -179,6 +182,7 @@ def test_kept_checkpoints_are_evaluated_like_the_final_one(tmp_path: Path) -> No
     assert code == 2 and "--keep-checkpoints 20" in output
 
 
+@pytest.mark.slow
 def test_a_sweep_extends_to_more_episodes_and_names_what_else_differs(tmp_path: Path) -> None:
     out = tmp_path / "s"
     command = ["sweep", "--conditions", "1p-low", "--seeds", "1", "--eval-episodes", "6", "--workers", "1"]
