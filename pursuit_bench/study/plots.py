@@ -507,7 +507,7 @@ def robust_png(result: dict[str, Any]) -> bytes:
     ladder_rows = -(-len(ladders) // 4) if alone else len(ladders)
     rows = ladder_rows + (1 if crossplay else 0)
     heights = [1.0] * ladder_rows + ([1.3] if crossplay else [])
-    fig = plt.figure(figsize=(max(3.3 * columns + 0.6, 9.0), 2.1 * sum(heights) + 1.2))
+    fig = plt.figure(figsize=(max(3.3 * columns + 0.6, 9.0), 2.1 * sum(heights) + 0.6))
     grid = fig.add_gridspec(rows, columns, height_ratios=heights)
     for col, condition in enumerate(conditions):
         for k, (name, levels) in enumerate(ladders.items()):
@@ -564,7 +564,7 @@ def robust_png(result: dict[str, Any]) -> bytes:
         ),
         fontsize=9,
     )
-    title = 0.9 if crossplay else 0.5  # inches kept for the title: two lines with cross-play, else one
+    title = 0.65 if crossplay else 0.35  # inches kept for the title: two lines with cross-play, else one
     fig.tight_layout(rect=(0, 0, 1, 1 - title / fig.get_figheight()))
     return _png(fig)
 
