@@ -96,6 +96,8 @@ def test_the_pool_never_holds_a_prey_that_trained_with_a_judged_predator() -> No
             assert folder not in {prey for _, prey in opponents} and opponents[0] == (pool.FLEEING, None)
     with pytest.raises(ValueError, match="fewer than two judged flat"):
         pool.plan([s for s in _sources(5) if not (s["kind"] == "flat" and s["seed"] in (1, 2))], (3, 4))
+    with pytest.raises(ValueError, match="flat seed 2 of 1p-low given twice"):
+        pool.plan([*_sources(5), _sources(5)[7]], (3, 4))
     with pytest.raises(ValueError, match="no hierarchical run of the pool seeds"):
         pool.plan([s for s in _sources(5) if not (s["kind"] == "hierarchical" and s["seed"] >= 3)], (3, 4))
 
@@ -146,6 +148,8 @@ def test_pool_on_a_tiny_sweep_judges_both_kinds_against_the_same_opponents(tmp_p
         assert name == "pool.json" or (tmp_path / "again" / name).read_bytes() == data, name
     code, output = run_cli("pool", str(sweep), "--out", str(out), "--pool-seeds", "7")
     assert code == 2 and "--pool-seeds: [7] not among" in output
+    code, output = run_cli("pool", str(sweep), str(sweep), "--out", str(tmp_path / "twice"), "--pool-seeds", "2")
+    assert code == 2 and "given twice" in output and not (tmp_path / "twice" / "pool-parts").exists()
 
 
 def test_reproduction_md_prints_what_the_committed_pool_results_give(tmp_path: Path) -> None:

@@ -84,40 +84,54 @@ def pool(
     except ValueError as error:
         raise BadInput(str(error)) from None
     atomic_write_text(out / "pool.json", json.dumps(result) + "\n")
-    summary = pools.write_report(result, out)
+    try:
+        summary = pools.write_report(result, out)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
     click.echo(pools.counts_markdown(summary))
     click.echo(f"written: pool.json, pool-report.json, pool.md, pool.png in {out}")
 
 
 def _sources(sweeps: tuple[Path, ...]) -> tuple[list[dict[str, Any]], list[int], list[int]]:
-    """The finished hierarchical and flat runs of the sweeps, their common budgets and seeds."""
+    """The hierarchical and flat runs of the sweeps (each finished, with every kept checkpoint),
+    their common budgets (two or more: learning against budget needs them) and seeds."""
     from pursuit_bench.training import runs
-    from pursuit_bench.training.sweep import PLAN, SweepPlan
+    from pursuit_bench.training.sweep import PLAN, SweepPlan, run_status
 
     sources: list[dict[str, Any]] = []
     budgets: list[int] | None = None
     seeds: set[int] = set()
     for where in sweeps:
-        plan = SweepPlan.from_dict(json.loads((where / PLAN).read_text())["plan"])
+        try:
+            plan = SweepPlan.from_dict(json.loads((where / PLAN).read_text())["plan"])
+        except (ValueError, KeyError, TypeError) as error:
+            raise BadInput(f"{where / PLAN}: not a pursuit-bench sweep plan ({error})") from None
         mine = sorted({*plan.keep_checkpoints, plan.episodes})
+        if len(mine) < 2:
+            raise BadInput(f"{where}: no kept checkpoints; train the sweep with --keep-checkpoints (e.g. 1500,5000)")
         if budgets is not None and mine != budgets:
             raise BadInput(f"{where}: its budgets {mine} differ from the other sweep's {budgets}")
         budgets = mine
         seeds |= set(range(plan.seeds))
-        for name in sorted(plan.runs()):
+        for name, config in sorted(plan.runs().items()):
+            if config.predator not in ("hierarchical", "flat"):
+                continue
             folder = where / "runs" / name
-            if not (folder / "eval.json").is_file():
-                raise BadInput(f"{folder}: not finished (no eval.json); finish the sweep first")
-            config, _ = runs.read_config(folder)
-            if config.predator in ("hierarchical", "flat"):
-                sources.append(
-                    {
-                        "name": name,
-                        "condition": config.condition,
-                        "kind": config.predator,
-                        "seed": config.seed,
-                        "folder": str(folder),
-                    }
-                )
+            try:
+                done, evaluated = run_status(folder, config, plan.keep_checkpoints)
+            except ValueError as error:
+                raise BadInput(str(error)) from None
+            missing = [n for n in plan.keep_checkpoints if not (folder / runs.milestone_checkpoint(n)).is_file()]
+            if not evaluated or done < config.episodes or missing:
+                raise BadInput(f"{folder}: not finished (trained {done} of {config.episodes}); finish the sweep first")
+            sources.append(
+                {
+                    "name": name,
+                    "condition": config.condition,
+                    "kind": config.predator,
+                    "seed": config.seed,
+                    "folder": str(folder),
+                }
+            )
     assert budgets is not None
     return sources, budgets, sorted(seeds)

@@ -3,7 +3,7 @@
 
     from pursuit_bench import pursuit_v0
 
-    env = pursuit_v0.env(condition="2p-high-shared")            # AEC, PettingZoo's usual wrappers
+    env = pursuit_v0.env(condition="2p-high-shared")            # AEC, PettingZoo's order-enforcing wrapper
     par = pursuit_v0.parallel_env(condition="2p-high-shared")   # ParallelEnv (the native form)
     raw = pursuit_v0.raw_env(condition="2p-high-shared")        # AEC without wrappers
 

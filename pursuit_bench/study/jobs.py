@@ -57,6 +57,10 @@ def run_jobs(
         context = multiprocessing.get_context("spawn")
         with concurrent.futures.ProcessPoolExecutor(min(workers, len(todo)), mp_context=context) as pool:
             futures = {pool.submit(work, *args): key for key, args in todo}
-            for future in concurrent.futures.as_completed(futures):
-                keep(futures[future], future.result())
+            try:
+                for future in concurrent.futures.as_completed(futures):
+                    keep(futures[future], future.result())
+            except BaseException:  # a failed evaluation: what finished is kept, nothing more is started
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
     return done

@@ -15,7 +15,7 @@ its **pool margin** is that minus the better of always-chase's and always-stalk'
 Hierarchical minus flat, per panel and budget: Welch's interval over runs (the two kinds' runs
 are independent), Holm over the panels of a budget, and two one-sided tests for equivalence
 within :data:`EQUIVALENCE_MARGIN` (Holm too). Learning speed: each run's pool margin averaged over
-the budgets (the area under its curve over the span of budgets), compared alike. Cross-kind play:
+the budgets (the area under its curve on a log-episode axis, over its span), compared alike. Cross-kind play:
 each judged run's predators against its own prey and against the prey of the other kind's run of
 the same seed, at the end of training.
 """
@@ -41,19 +41,25 @@ FLEEING = "FleeingPrey"
 #: panel where the fixed modes differ at all.
 EQUIVALENCE_MARGIN = 0.05
 VERDICTS = ("rule helps", "flat better", "equivalent", "not resolved")
-#: The final budget's name among a run's checkpoints.
-FINAL = "checkpoint.pt"
 
 
 def checkpoint_name(episodes: int, final: int) -> str:
     """The checkpoint a sweep's run keeps at ``episodes`` (its last one at ``final``)."""
-    return FINAL if episodes == final else f"checkpoint-ep{episodes}.pt"
+    from pursuit_bench.training import runs
+
+    return runs.CHECKPOINT if episodes == final else runs.milestone_checkpoint(episodes)
 
 
 def plan(sources: list[dict[str, Any]], pool_seeds: tuple[int, ...]) -> dict[str, Any]:
     """Split a sweep's runs (``name``, ``condition``, ``kind``, ``seed``, ``folder``) into the judged
     runs and each condition's pool (FleeingPrey, then the pool seeds' runs of both kinds);
     ValueError where a condition lacks a pool run of either kind or two judged runs of either."""
+    seen: set[tuple[str, str, int]] = set()
+    for s in sources:  # a run twice (one sweep given twice, say) would count twice in every interval
+        key = (s["condition"], s["kind"], s["seed"])
+        if key in seen:
+            raise ValueError(f"{s['name']}: {s['kind']} seed {s['seed']} of {s['condition']} given twice")
+        seen.add(key)
     judged: list[dict[str, Any]] = []
     pools: dict[str, list[dict[str, Any]]] = {}
     for condition in [c for c in CONDITIONS if any(s["condition"] == c for s in sources)]:
@@ -67,9 +73,6 @@ def plan(sources: list[dict[str, Any]], pool_seeds: tuple[int, ...]) -> dict[str
                 raise ValueError(f"{condition}: fewer than two judged {kind} runs (seeds outside the pool)")
         pools[condition] = pool
         judged += rest
-    for run in judged:
-        if any(member["folder"] == run["folder"] for member in pools[run["condition"]]):
-            raise ValueError(f"{run['name']}: a judged run's own prey is in its pool")
     return {"judged": judged, "pools": pools}
 
 
@@ -88,7 +91,8 @@ def _jobs(
             if (r["condition"], r["seed"]) == (run["condition"], run["seed"]) and r["kind"] != run["kind"]
         ]
         crossed = [("own", run["folder"])] + [("other kind", t["folder"]) for t in twin]
-        jobs.append((f"{run['name']}|cross", (run["folder"], FINAL, crossed, cross_episodes, seed)))
+        final = checkpoint_name(budgets[-1], budgets[-1])
+        jobs.append((f"{run['name']}|cross", (run["folder"], final, crossed, cross_episodes, seed)))
     return jobs
 
 
@@ -155,13 +159,18 @@ def run(
 
     layout = plan(sources, pool_seeds)
     jobs = _jobs(layout, budgets, episodes, cross_episodes, seed)
-    stamp = {"episodes": episodes, "cross_episodes": cross_episodes, "seed": seed}
+    # a kept evaluation is reused only for the same pool and budgets (an extended sweep's last budget differs)
+    stamp = {
+        "episodes": episodes,
+        "cross_episodes": cross_episodes,
+        "seed": seed,
+        "budgets": budgets,
+        "pool_seeds": list(pool_seeds),
+    }
     done = run_jobs(jobs, play, out / "pool-parts", stamp, workers=workers, progress=progress)
     return {
         "format": FORMAT,
         **stamp,
-        "budgets": budgets,
-        "pool_seeds": list(pool_seeds),
         "pools": {c: [FLEEING] + [m["name"] for m in members] for c, members in layout["pools"].items()},
         "runs": [
             {
@@ -274,12 +283,11 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
         for key in ("margin", "return")
     }
 
-    span = np.array([int(b) for b in budgets], dtype=float)
+    span = np.log([int(b) for b in budgets])  # a log axis: the early budgets weigh as the late ones
 
     def area(predator: str) -> Callable[[Any], float]:
         def measure(r: dict[str, Any]) -> float:
-            curve = [pooled(r["pool"][b], predator)["margin"] for b in budgets]
-            c = np.asarray(curve)  # the trapezoid rule over the budgets, per episode of the span
+            c = np.array([pooled(r["pool"][b], predator)["margin"] for b in budgets])
             return float(np.sum((c[1:] + c[:-1]) / 2 * np.diff(span)) / (span[-1] - span[0]))
 
         return measure
@@ -325,6 +333,8 @@ def episode_noise(result: dict[str, Any]) -> dict[str, Any]:
             between = pooled_returns.var(ddof=1)
             if between > 0:
                 shares.append(float(np.mean(errors**2) / between))
+    if not shares:
+        return {"median_share": None, "largest_share": None, "cells": 0}
     return {"median_share": float(np.median(shares)), "largest_share": float(np.max(shares)), "cells": len(shares)}
 
 
@@ -409,7 +419,7 @@ def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
     the verdict."""
     lines = [
         f"| condition | predator | {what}: hierarchical | flat | hierarchical − flat [95 % Welch] | p (Holm) "
-        "| equivalence p (Holm) | within ± | verdict |",
+        "| equivalence p (Holm) | within ± (unadjusted) | verdict |",
         "|---|---|---:|---:|---:|---:|---:|---:|---|",
     ]
     for r in rows:
@@ -469,14 +479,19 @@ def markdown(summary: dict[str, Any]) -> str:
     """pool.md: every table the docs quote."""
     final = summary["budgets"][-1]
     noise = summary["episode_noise"]
+    noise_text = (
+        f"The evaluation's episodes make {noise['median_share']:.0%} of the variance of the pool return over "
+        f"runs at {final['episodes']} episodes (median over panels and kinds; at most "
+        f"{noise['largest_share']:.0%}): the runs' spread is what the intervals measure."
+        if noise["cells"]
+        else "The pool return does not vary between runs: nothing to compare the episodes' noise with."
+    )
     return "\n".join(
         [
             "## Verdicts by budget",
             "",
             counts_markdown(summary),
-            f"The evaluation's episodes make {noise['median_share']:.0%} of the variance of the pool return over "
-            f"runs at {final['episodes']} episodes (median over panels and kinds; at most "
-            f"{noise['largest_share']:.0%}): the runs' spread is what the intervals measure.",
+            noise_text,
             "",
             f"## Panels at {final['episodes']} episodes: the pool margin",
             "",
@@ -487,7 +502,7 @@ def markdown(summary: dict[str, Any]) -> str:
             "## Probability of improvement",
             "",
             improvement_markdown(summary),
-            "## Learning speed: the pool margin averaged over the budgets",
+            "## Learning speed: the pool margin averaged over the budgets (log-episode axis)",
             "",
             panels_markdown(summary["learning_speed"]["panels"], "mean pool margin"),
             "## Cross-kind play at the end of training",
