@@ -314,28 +314,27 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
 
 
 def episode_noise(result: dict[str, Any]) -> dict[str, Any]:
-    """How much of the spread of the pool return over runs the evaluation's episodes make, at the
-    last budget: per panel and kind, the mean squared standard error of a run's pool return (its
-    opponents' standard errors combined) over the variance of the pool return between runs; the
-    median and largest share over panels and kinds."""
+    """At the last budget, per panel and kind: the standard error a run's pool return carries from
+    its episodes (its opponents' standard errors combined, root mean square over runs) beside the
+    standard deviation of the pool return between runs; the medians and ranges over panels and
+    kinds. Every run plays the same episodes, so much of that error is shared by all runs."""
     final = str(result["budgets"][-1])
-    shares = []
+    errors, spreads = [], []
     for condition, predator in _panels(result):
         for kind in KINDS:
             runs = [r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)]
-            pooled_returns = np.array([pooled(r["pool"][final], predator)["return"] for r in runs])
-            errors = np.array(
-                [
-                    np.sqrt(sum(e["stderr"][predator] ** 2 for e in r["pool"][final].values())) / len(r["pool"][final])
-                    for r in runs
-                ]
-            )
-            between = pooled_returns.var(ddof=1)
-            if between > 0:
-                shares.append(float(np.mean(errors**2) / between))
-    if not shares:
-        return {"median_share": None, "largest_share": None, "cells": 0}
-    return {"median_share": float(np.median(shares)), "largest_share": float(np.max(shares)), "cells": len(shares)}
+            returns = np.array([pooled(r["pool"][final], predator)["return"] for r in runs])
+            per_run = [
+                np.sqrt(sum(e["stderr"][predator] ** 2 for e in r["pool"][final].values())) / len(r["pool"][final])
+                for r in runs
+            ]
+            errors.append(float(np.sqrt(np.mean(np.square(per_run)))))
+            spreads.append(float(returns.std(ddof=1)))
+    return {
+        "stderr": {"median": float(np.median(errors)), "range": [min(errors), max(errors)]},
+        "between_runs_sd": {"median": float(np.median(spreads)), "range": [min(spreads), max(spreads)]},
+        "cells": len(errors),
+    }
 
 
 def _condition_margin(evaluation: dict[str, Any]) -> float:
@@ -347,7 +346,7 @@ def cross_kind(result: dict[str, Any]) -> list[dict[str, Any]]:
     """Per condition and kind: the margin (mean over predators) against the run's own prey, against
     the prey of the other kind's run of the same seed, and against the pool, over runs; the
     change from own prey to the other kind's, paired by run."""
-    rows = []
+    rows: list[dict[str, Any]] = []
     final = str(result["budgets"][-1])
     for condition in [c for c in CONDITIONS if any(r["condition"] == c for r in result["runs"])]:
         for kind in KINDS:
@@ -374,6 +373,9 @@ def cross_kind(result: dict[str, Any]) -> list[dict[str, Any]]:
                     "change": {k: change[k] for k in ("mean", "ci", "p_greater", "p_less")},
                 }
             )
+    two_sided = [min(1.0, 2 * min(r["change"]["p_greater"], r["change"]["p_less"])) for r in rows]
+    for row, adjusted in zip(rows, statistics.holm(two_sided) if rows else [], strict=True):
+        row["change"]["p_holm"] = float(adjusted)  # the table is one family
     return rows
 
 
@@ -463,14 +465,14 @@ def cross_markdown(rows: list[dict[str, Any]]) -> str:
     """Cross-kind play: the margin against the run's own prey, the other kind's prey and the pool."""
     lines = [
         "| condition | predators | runs | margin against own prey | against the other kind's prey | change "
-        "[95 % t, paired by run] | against the pool |",
-        "|---|---|---:|---:|---:|---:|---:|",
+        "[95 % t, paired by run] | p (Holm) | against the pool |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         lines.append(
             f"| {r['condition']} | {r['kind']} | {r['runs']} | {r['own_prey']['mean']:+.3f} "
             f"| {r['other_kind_prey']['mean']:+.3f} | {r['change']['mean']:+.3f}{_span(r['change']['ci'])} "
-            f"| {r['pool']['mean']:+.3f} |"
+            f"| {_p(r['change']['p_holm'])} | {r['pool']['mean']:+.3f} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -479,12 +481,12 @@ def markdown(summary: dict[str, Any]) -> str:
     """pool.md: every table the docs quote."""
     final = summary["budgets"][-1]
     noise = summary["episode_noise"]
+    se, sd = noise["stderr"], noise["between_runs_sd"]
     noise_text = (
-        f"The evaluation's episodes make {noise['median_share']:.0%} of the variance of the pool return over "
-        f"runs at {final['episodes']} episodes (median over panels and kinds; at most "
-        f"{noise['largest_share']:.0%}): the runs' spread is what the intervals measure."
-        if noise["cells"]
-        else "The pool return does not vary between runs: nothing to compare the episodes' noise with."
+        f"At {final['episodes']} episodes a run's pool return carries a standard error of {se['median']:.3f} from its "
+        f"episodes (median over panels and kinds; {se['range'][0]:.3f} to {se['range'][1]:.3f}); the runs of a kind "
+        f"spread by a standard deviation of {sd['median']:.3f} ({sd['range'][0]:.3f} to {sd['range'][1]:.3f}). "
+        "Every run plays the same episodes, so much of that error is common to all runs."
     )
     return "\n".join(
         [
