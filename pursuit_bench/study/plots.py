@@ -590,7 +590,8 @@ def pool_png(summary: dict[str, Any]) -> bytes:
                 ax.fill_between(x, low, high, color=colors[kind], alpha=0.2, lw=0)
         ax.axhline(0.0, color="black", lw=0.6)
         ax.set_xscale("log")
-        ax.set_xticks(x, [f"{e / 1000:g}k" for e in x], fontsize=7, rotation=45)
+        close = np.r_[np.diff(np.log(x)) < 0.35, False]  # a budget too near the next one goes unlabelled
+        ax.set_xticks(x, ["" if c else f"{e / 1000:g}k" for e, c in zip(x, close, strict=True)], fontsize=7)
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.tick_params(axis="y", labelsize=7)
         ax.set_title(conditions[i], fontsize=9)
@@ -598,9 +599,11 @@ def pool_png(summary: dict[str, Any]) -> bytes:
             ax.set_ylabel("pool margin", fontsize=8)
     axes.flat[0].legend(fontsize=7, loc="best")
     seeds = {k: len(v) for k, v in summary["seeds"].items()}
+    budgets = [b["episodes"] for b in summary["budgets"]]
     fig.suptitle(
         "Margin over the better fixed mode against one pool of opponents, by training episodes\n"
-        f"mean over runs ({seeds['hierarchical']} hierarchical, {seeds['flat']} flat), band: 95 % t-interval",
+        f"mean over runs ({seeds['hierarchical']} hierarchical, {seeds['flat']} flat), band: 95 % t-interval; "
+        f"ticks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)})",
         fontsize=10,
     )
     fig.tight_layout()
