@@ -69,7 +69,7 @@ def main() -> None:
     ax.set_title(
         f"{CONDITION}, shipped agents, one episode ({len(positions) - 1} steps, prey {end})\n"
         "the network picks how hard (stalk or chase), parallel navigation where;\n"
-        "o start, x end. Does the rule help? (REPRODUCTION.md)",
+        "o start, x end",
         fontsize=8,
     )
     fig.tight_layout()

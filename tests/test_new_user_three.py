@@ -19,7 +19,7 @@ def test_the_shipped_agents_are_opponents_and_every_prey_line_names_its_prey(tmp
     result = json.loads((out / "eval-vs-pretrained-2p-high-individual.json").read_text())
     assert result["opponents"]["prey"] == "pretrained:2p-high-individual"
     assert "prey_0 (pretrained:2p-high-individual's learned prey), greedy:" in output
-    assert "the run's own prey against pretrained:2p-high-individual's predators, greedy:" in output
+    assert "the evaluated agents' own prey against pretrained:2p-high-individual's predators, greedy:" in output
     code, output = run_cli(*args, "--opponents", "scripted")
     assert code == 0, output
     assert "prey_0: FleeingPrey (scripted)" in output and "learned" not in output
@@ -45,23 +45,24 @@ def test_a_mismatch_says_what_differs_and_how_to_train_a_match(tmp_path: Path) -
 
 
 def test_a_prey_s_outcomes_add_up_to_its_episodes() -> None:
-    # four episodes of 300 steps at most: caught on the last step, the prey out, a predator out, the time limit
+    # five episodes of 300 steps at most: caught on the last step, caught against a wall, the prey
+    # into a wall, a predator into a wall, the time limit
     played = Episodes(
-        returns=np.zeros((4, 2)),
-        lengths=np.array([300, 120, 80, 300]),
-        captured=np.array([True, False, False, False]),
-        chase_fraction=np.zeros((4, 1)),
-        distance=np.zeros((4, 2)),
-        left_area=np.array([[False, False], [False, True], [True, False], [False, False]]),
-        collisions=np.zeros((4, 2)),
-        contact_steps=np.zeros((4, 2)),
+        returns=np.zeros((5, 2)),
+        lengths=np.array([300, 40, 120, 80, 300]),
+        captured=np.array([True, True, False, False, False]),
+        chase_fraction=np.zeros((5, 1)),
+        distance=np.zeros((5, 2)),
+        left_area=np.array([[False, False], [False, True], [False, True], [True, False], [False, False]]),
+        collisions=np.zeros((5, 2)),
+        contact_steps=np.zeros((5, 2)),
     )
     outcomes = prey_outcomes(played, 300)
-    assert (outcomes["captured"], outcomes["left_area"], outcomes["survived"]) == (0.25, 0.25, 0.25)
+    assert (outcomes["captured"], outcomes["left_area"], outcomes["survived"]) == (0.4, 0.2, 0.2)
     config, agents, _ = pretrained.described("1p-high")
     result = evaluate_agents("1p-high", agents, episodes=60, seed=3, **config.protocol)
     for check in result["prey_check"].values():
-        assert check["captured"] + check["left_area"] + check["survived"] <= 1.0 + 1e-12
+        assert check["captured"] + check["left_area"] + check["survived"] <= 1.0 + 1e-12  # exclusive
 
 
 def test_robust_on_an_unreadable_checkpoint_stops_at_once_and_leaves_nothing(tmp_path: Path) -> None:

@@ -180,7 +180,7 @@ def _held_out(
 def _outcomes(check: dict[str, float]) -> str:
     """A prey's check in words: its return and how its episodes ended."""
     return (
-        f"return {check['return']:+.3f}, caught {check['captured']:.0%}, left the arena {check['left_area']:.0%}, "
+        f"return {check['return']:+.3f}, caught {check['captured']:.0%}, ran into a wall {check['left_area']:.0%}, "
         f"survived to the time limit {check['survived']:.0%}"
     )
 
@@ -248,9 +248,6 @@ def _evaluate_run(
         )
     held_out = result.get("opponents", {})
     side = held_out.get("prey_side")
-    if side is not None:
-        check = side["prey_check"]["learned_greedy"]
-        click.echo(f"the run's own prey against {held_out['prey']}'s predators, greedy: {_outcomes(check)}")
     check = result.get("prey_check")
     if check is not None:
         external = result["prey_kind"].startswith("external")
@@ -259,14 +256,17 @@ def _evaluate_run(
             if external
             else f"{held_out['prey']}'s learned prey"
             if side is not None
-            else "the run's learned prey"
+            else "the learned prey"
         )
         click.echo(
             f"prey_0 ({who}), greedy: {_outcomes(check['learned_greedy'])}; "
             f"FleeingPrey in its place: {_outcomes(check['fleeing_prey'])}"
         )
     elif held_out.get("prey") == "FleeingPrey":
-        click.echo("prey_0: FleeingPrey (scripted), in the run's prey's place")
+        click.echo("prey_0: FleeingPrey (scripted), in the evaluated agents' prey's place")
+    if side is not None:
+        check = side["prey_check"]["learned_greedy"]
+        click.echo(f"the evaluated agents' own prey against {held_out['prey']}'s predators, greedy: {_outcomes(check)}")
     if result.get("perturbations"):
         click.echo("perturbed: " + ", ".join(f"{k}={v:g}" for k, v in result["perturbations"].items()))
     click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")

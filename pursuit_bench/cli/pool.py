@@ -52,6 +52,8 @@ def pool(
     import os
 
     for where in sweeps:  # before anything heavy is imported (training.sweep brings torch): a refusal comes at once
+        if not where.is_dir():
+            raise BadInput(f"{where}: no such sweep folder")
         if not (where / "sweep.json").is_file():
             raise BadInput(f"{where}: not a sweep folder (no sweep.json)")
     from pursuit_bench.io.files import atomic_write_text

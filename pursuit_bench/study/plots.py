@@ -601,9 +601,10 @@ def pool_png(summary: dict[str, Any]) -> bytes:
     seeds = {k: len(v) for k, v in summary["seeds"].items()}
     budgets = [b["episodes"] for b in summary["budgets"]]
     fig.suptitle(
-        "Margin over the better fixed mode against one pool of opponents, by training episodes\n"
+        "Margin over the better fixed mode against one pool of opponents, by training episodes: mean over "
+        "the condition's predators\n"
         f"mean over runs ({seeds['hierarchical']} hierarchical, {seeds['flat']} flat), band: 95 % t-interval; "
-        f"ticks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)})",
+        f"tick marks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)}), labelled where they fit",
         fontsize=10,
     )
     fig.tight_layout()

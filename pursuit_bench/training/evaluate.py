@@ -169,13 +169,14 @@ def standard_error(values: np.ndarray) -> float:
 
 def prey_outcomes(played: Episodes, max_steps: int) -> dict[str, float]:
     """The prey's (the last agent's) mean return, and the fraction of episodes in which it was
-    caught, left the arena, or survived to the time limit (not caught, nobody out of the arena):
-    the three add to one but for episodes a predator ended by leaving the arena."""
+    caught, ran into a wall uncaught (``left_area``: caught against a wall counts as caught), or
+    survived to the time limit (not caught, nobody at a wall): the three add to one but for
+    episodes a predator ended by running into a wall."""
     caught = played.captured.astype(bool)
     left = played.left_area.astype(bool)
     return {
         "return": float(played.returns[:, -1].mean()),
-        "left_area": float(left[:, -1].mean()),
+        "left_area": float((left[:, -1] & ~caught).mean()),
         "captured": float(caught.mean()),
         "survived": float(((played.lengths == max_steps) & ~caught & ~left.any(axis=1)).mean()),
     }
