@@ -160,7 +160,8 @@ def _held_out(
         other_config, other, _ = pretrained.described(opponents.removeprefix(SHIPPED))
     else:
         other_config, other, _ = runs.described(Path(opponents))
-    check_opponents(config, other_config, mine="the run", theirs=opponents)
+    mine = "the shipped agents" if "pretrained" in about else "the run"
+    check_opponents(config, other_config, mine=mine, theirs=opponents)
     prey_side = evaluate_agents(
         config.condition,
         {**{k: v for k, v in other.items() if k != "prey_0"}, "prey_0": prey},
