@@ -5,6 +5,7 @@ run got and how it was doing.
 
 from __future__ import annotations
 
+import collections
 import sys
 import time
 from collections.abc import Callable
@@ -41,7 +42,7 @@ class Progress:
         self._done = done
         self._start, self._start_done = time.monotonic(), done
         self._last_time, self._last_done = self._start, done
-        self._history: list[tuple[float, int]] = [(self._start, done)]
+        self._history: collections.deque[tuple[float, int]] = collections.deque([(self._start, done)])
 
     #: No ETA before this share of what is left at the start is done: episodes grow longer as the
     #: agents learn (a prey that survives), so the first episodes' rate promises far too much.
@@ -53,9 +54,7 @@ class Progress:
         work = self.total - self._start_done
         if self._done - self._start_done < self.ETA_AFTER * work:
             return f"after {self.ETA_AFTER:.0%}"
-        now = self._history[-1][0]
-        window = [(t, d) for t, d in self._history[:-1] if self._done - d <= self.ETA_AFTER * work]
-        t0, d0 = window[0] if window else self._history[-2]
+        (t0, d0), (now, _) = self._history[0], self._history[-1]  # the window's start (see _line)
         rate = (self._done - d0) / max(now - t0, 1e-9)
         return time.strftime("%H:%M:%S", time.gmtime((self.total - self._done) / rate)) if rate > 0 else "?"
 
@@ -72,6 +71,9 @@ class Progress:
     def _line(self, now: float) -> None:
         rate = (self._done - self._start_done) / max(now - self._start, 1e-9)
         self._history.append((now, self._done))
+        window = self.ETA_AFTER * (self.total - self._start_done)
+        while len(self._history) > 2 and self._done - self._history[0][1] > window:
+            self._history.popleft()  # kept: the lines within the last tenth of the work, or the one before
         eta = ""
         if self.eta:  # by episodes: the ETA of one run (a sweep's describe() gives its own)
             eta = f" | ETA {self._eta()}"

@@ -31,6 +31,7 @@ import numpy as np
 
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.study import statistics
+from pursuit_bench.study.report import p_text, span_text
 
 FORMAT = "pursuit-bench-pool-1"
 KINDS = ("hierarchical", "flat")
@@ -407,14 +408,6 @@ def curves(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
 # --- tables --------------------------------------------------------------------------------------
 
 
-def _span(ci: list[float] | None, digits: int = 3) -> str:
-    return f" [{ci[0]:+.{digits}f}, {ci[1]:+.{digits}f}]" if ci else ""
-
-
-def _p(value: float) -> str:
-    return f"{value:.3f}" if value >= 1e-3 else f"{value:.0e}"
-
-
 def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
     """One budget's panels: each kind's mean ``what`` over runs, hierarchical minus flat with its
     95 % Welch interval and Holm p, the equivalence test's Holm p and the bound it reaches, and
@@ -428,8 +421,8 @@ def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
         d, e = r["difference"], r["equivalence"]
         lines.append(
             f"| {r['condition']} | {r['predator']} | {r['means']['hierarchical']:+.3f} | {r['means']['flat']:+.3f} "
-            f"| {d['mean']:+.3f}{_span(d['ci'])} | {_p(d['p_holm'])} | {_p(e['p_holm'])} | {e['bound']:.3f} "
-            f"| **{r['verdict']}** |"
+            f"| {d['mean']:+.3f}{span_text(d['ci'])} | {p_text(d['p_holm'])} | {p_text(e['p_holm'])} "
+            f"| {e['bound']:.3f} | **{r['verdict']}** |"
         )
     return "\n".join(lines) + "\n"
 
@@ -471,8 +464,8 @@ def cross_markdown(rows: list[dict[str, Any]]) -> str:
     for r in rows:
         lines.append(
             f"| {r['condition']} | {r['kind']} | {r['runs']} | {r['own_prey']['mean']:+.3f} "
-            f"| {r['other_kind_prey']['mean']:+.3f} | {r['change']['mean']:+.3f}{_span(r['change']['ci'])} "
-            f"| {_p(r['change']['p_holm'])} | {r['pool']['mean']:+.3f} |"
+            f"| {r['other_kind_prey']['mean']:+.3f} | {r['change']['mean']:+.3f}{span_text(r['change']['ci'])} "
+            f"| {p_text(r['change']['p_holm'])} | {r['pool']['mean']:+.3f} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -470,11 +470,13 @@ def curves(results: list[RunResult]) -> dict[str, dict[str, Any]]:
     return out
 
 
-def _span(ci: list[float] | None, digits: int = 3) -> str:
+def span_text(ci: list[float] | None, digits: int = 3) -> str:
+    """An interval as the tables print it: ` [low, high]` signed, or nothing without one."""
     return f" [{ci[0]:+.{digits}f}, {ci[1]:+.{digits}f}]" if ci else ""
 
 
-def _p(value: float | None) -> str:
+def p_text(value: float | None) -> str:
+    """A p-value as the tables print it: three decimals, or one significant digit below 0.001."""
     if value is None:
         return "–"
     return f"{value:.3f}" if value >= 0.001 else f"{value:.0e}"
@@ -494,7 +496,7 @@ def classification_markdown(table: list[dict[str, Any]]) -> str:
         for b in BASELINES:
             c = t["paired"][b]
             side = "p_less_holm" if t["verdict"] == "worse" else "p_greater_holm"
-            cells += [f"{c['mean']:+.3f}{_span(c['ci'])}", _p(c.get(side))]
+            cells += [f"{c['mean']:+.3f}{span_text(c['ci'])}", p_text(c.get(side))]
         lines.append(f"| {t['condition']} | {t['predator']} | **{t['verdict']}** | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -504,7 +506,7 @@ def variants_markdown(table: list[dict[str, Any]]) -> str:
     the variant with the highest mean (``tie`` when shared)."""
 
     def cell(v: dict[str, Any] | None) -> str:
-        return "–" if v is None else f"{v['mean']:+.3f}{_span(v['ci'], 2)}"
+        return "–" if v is None else f"{v['mean']:+.3f}{span_text(v['ci'], 2)}"
 
     kinds = sorted({k for t in table for k in t["variants"]} - set(BASELINES), key=lambda k: (k != "hierarchical", k))
     lines = [
@@ -529,9 +531,7 @@ def counts_markdown(counts: dict[str, Any]) -> str:
         return "No panel has both baselines.\n"
     header = " | ".join(f"seed {s}" for s in counts["seeds"])
     values = " | ".join(str(c) for c in counts["counts"])
-    spread = (
-        f"{counts['mean']:.1f}{_span(counts['ci'], 1).replace('+', '')}" if counts["ci"] else f"{counts['mean']:.1f}"
-    )
+    spread = f"{counts['mean']:.1f}" + (span_text(counts["ci"], 1).replace("+", "") if counts["ci"] else "")
     return (
         f"| {header} | mean [95 % t-interval] | seeds at or above the paper's {counts['paper']} |\n"
         f"|{'---:|' * (len(counts['seeds']) + 2)}\n"
@@ -648,10 +648,10 @@ def flat_markdown(rows: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {r['condition']} | {r['seeds']['hierarchical']} / {r['seeds']['flat']} "
             f"| {m['hierarchical']['mean']:+.3f} / {m['flat']['mean']:+.3f} "
-            f"| {m['difference']['mean']:+.3f}{_span(m['difference']['ci'])} "
+            f"| {m['difference']['mean']:+.3f}{span_text(m['difference']['ci'])} "
             f"| {ret['hierarchical']['mean']:+.2f} / {ret['flat']['mean']:+.2f} "
             f"| {cap['hierarchical']['mean']:.0%} / {cap['flat']['mean']:.0%} "
-            f"| {cap['difference']['mean']:+.2f}{_span(cap['difference']['ci'], 2)} |"
+            f"| {cap['difference']['mean']:+.2f}{span_text(cap['difference']['ci'], 2)} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -702,7 +702,7 @@ def convergence_markdown(rows: list[dict[str, Any]]) -> str:
     for r in rows:
         margins = " → ".join(f"{m:+.3f}" for m in r["margins"])
         lines.append(
-            f"| {r['condition']} | {r['predator']} | {margins} | {r['mean']:+.4f}{_span(r['ci'], 4)} "
+            f"| {r['condition']} | {r['predator']} | {margins} | {r['mean']:+.4f}{span_text(r['ci'], 4)} "
             f"| {r['verdict']} | {r['detectable']:.4f} |"
         )
     return "\n".join(lines) + "\n"
