@@ -100,27 +100,41 @@ def pooled_skewness(groups: np.ndarray | list[np.ndarray]) -> float:
     return float(stats.skew(np.concatenate(z)))
 
 
-def main() -> None:
-    print("| data | seeds | t-interval | percentile bootstrap |")
-    print("|---|---:|---:|---:|")
+def coverage_markdown() -> str:
+    """docs/statistics.md's coverage table: the t-interval beside the percentile bootstrap."""
+    lines = ["| data | seeds | t-interval | percentile bootstrap |", "|---|---:|---:|---:|"]
     for label, draw, truth in DISTRIBUTIONS:
         for n in SEEDS:
             t = statistics.coverage(draw, truth, n, DRAWS, seed=n)
             bootstrap = percentile_bootstrap_coverage(draw, truth, n, seed=n)
-            print(f"| {label} | {n} | {t:.1%} | {bootstrap:.1%} |")
-    welch_checks()
+            lines.append(f"| {label} | {n} | {t:.1%} | {bootstrap:.1%} |")
+    return "\n".join(lines) + "\n"
+
+
+def skewness_figures() -> dict[str, float]:
+    """How skewed the reproduction's seed-level differences are (pooled over its comparisons,
+    standardised within each), and the same measure on as many simulated groups of each
+    distribution: docs/statistics.md quotes them."""
     table = report.panel_table(report.collect(ROOT / "results" / "reproduction"))
     ours = [np.array(c["differences"]) for t in table for c in t.get("paired", {}).values()]
+    n, rng = len(ours[0]), np.random.default_rng(0)
+    figures = {"results/reproduction": pooled_skewness(ours)}
+    for label, draw, _ in DISTRIBUTIONS:
+        figures[label] = pooled_skewness(list(draw(rng, (len(ours) * 50, n))))
+    return figures
+
+
+def main() -> None:
+    print(coverage_markdown())
+    welch_checks()
     print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (statistics.median_interval) |")
     print("|---:|---:|---:|")
     for sigma in (0.3, 0.6):
         for n in (3, 5, 10, 20):
             print(f"| {sigma} | {n} | {median_coverage(sigma, n):.1%} |")
-    n, rng = len(ours[0]), np.random.default_rng(0)
-    print(f"\nseed-level differences of results/reproduction ({len(ours)} comparisons of {n} seeds):")
-    print(f"pooled skewness {pooled_skewness(ours):+.2f}; the same measure on as many simulated groups:")
-    for label, draw, _ in DISTRIBUTIONS:
-        print(f"  {label}: {pooled_skewness(list(draw(rng, (len(ours) * 50, n)))):+.2f}")
+    print("\npooled skewness of the seed-level differences, and of as many simulated groups:")
+    for label, value in skewness_figures().items():
+        print(f"  {label}: {value:+.2f}")
 
 
 if __name__ == "__main__":

@@ -1,17 +1,32 @@
-"""The pursuit-law method's validation (docs/pursuit-law.md): synthetic attacks by each law in
-continuous time, sampled at 10 Hz with 0.001 of position noise, five per case; every law fitted,
-one chosen by BIC. Writes results/pursuit-law/validation.json (every fit, full precision) and
-docs/figures/law-profile.png (the whole-attack error over N: how well N is determined), and
-prints the docs' table.
+"""The pursuit-law method's validation (docs/pursuit-law.md), on synthetic attacks whose law is
+known (:mod:`pursuit_bench.study.synthetic_attacks`), every law fitted and one chosen by BIC
+(:func:`pursuit_bench.study.guidance.select`):
 
-    python scripts/law_validation.py            # about 30 s
+- ``validation``: each law in continuous time, five attacks per case over the whole attack (up
+  to 4 s), and the misspecification control: laws flown as our predators fly (12 directions 30°
+  apart, each held one 0.1 s step, the velocity lagging with the env's damping), which no fitted
+  law holds. Writes results/pursuit-law/validation.json and docs/figures/law-profile.png (the
+  whole-attack error over N: how well N is determined).
+- ``confusion``: the selection by attack length: :data:`PER_CELL` held-out attacks (seeds from
+  :data:`FIRST_SEED`) per true law and length, the first :data:`HISTORY` samples the history a
+  delayed law reads (as our segments carry) and n samples after the onset, n in
+  :data:`LENGTHS`. Writes results/pursuit-law/confusion.json.
+
+Every selection is written in full: each law's gains, delay, censoring, error and criterion, the
+floor and the laws under it. ``python scripts/law_tables.py`` prints the docs' tables from these
+files.
+
+    python scripts/law_validation.py                 # both parts, about 3 min on one core
+    python scripts/law_validation.py --parts confusion
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -24,7 +39,10 @@ from pursuit_bench.study import guidance
 from pursuit_bench.study.synthetic_attacks import TrueLaw, attack
 
 ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "results" / "pursuit-law"
 DT = 0.1
+#: Attacks per validation case (seeds 0 … 4, the tests' too).
+ATTACKS = 5
 CASES = [
     TrueLaw("pp", k_gain=1.0),
     TrueLaw("pp", k_gain=3.0),
@@ -39,53 +57,96 @@ CASES = [
     TrueLaw("parallel", delay=0.2),
     TrueLaw("none"),
 ]
+#: The velocity's time constant under the env's damping: a quarter lost per 0.1 s step.
+ENV_LAG = float(DT / np.log(4 / 3))
+#: The misspecification control: a low-gain navigation (N 2, about the flat predators' fitted
+#: gains) and the collision course (the hierarchical predator's lower layer), each flown as our
+#: predators fly: 12 directions 30° apart around the line of sight, each held one step, the
+#: velocity lagging with the env's damping.
+MISSPECIFIED = [
+    TrueLaw("pn", n_gain=2.0, directions=12, hold=DT, velocity_lag=ENV_LAG),
+    TrueLaw("parallel", directions=12, hold=DT, velocity_lag=ENV_LAG),
+]
+#: Samples after the onset in the confusion matrix: the shipped predators' chases have 7 to 19
+#: (results/pursuit-law/shipped-1p-low.json), and 35 is the validation's whole attack.
+LENGTHS = (8, 12, 16, 20, 35)
+#: Samples of history before the onset (pursuit_laws.MAX_DELAY: what our segments carry).
+HISTORY = 5
+#: Attacks per true law and length.
+PER_CELL = 10
+#: The confusion matrix's attacks are seeds from here on (held out from the tests' 0 … 4), the
+#: first :data:`PER_CELL` that last long enough (an attack ends when the pursuer catches).
+FIRST_SEED = 1000
+CONFUSION = [
+    TrueLaw("none"),
+    TrueLaw("pp", k_gain=2.0, delay=0.1),
+    TrueLaw("pn", n_gain=3.0, delay=0.1),
+    TrueLaw("pn", n_gain=8.0, delay=0.1),
+    TrueLaw("mixed", n_gain=2.5, k_gain=2.0, delay=0.1),
+    TrueLaw("parallel"),
+    *MISSPECIFIED,
+]
 
 
-def made_with(true: TrueLaw) -> str:
-    gains = [f"N {true.n_gain:g}" for _ in [0] if "N" in guidance.LAW_GAINS[true.law]]
-    gains += [f"K {true.k_gain:g}" for _ in [0] if "K" in guidance.LAW_GAINS[true.law]]
-    delay = [f"τ {true.delay:g} s"] if true.law != "none" else []
-    return ", ".join(gains + delay) or "-"
+def record(selection: guidance.Selection, seed: int) -> dict[str, Any]:
+    """One selection in full: every law's fit, the chosen law, the floor and the laws under it."""
+    return {
+        "seed": seed,
+        "chosen": selection.chosen.law,
+        "samples": selection.chosen.samples,
+        "floor": selection.floor,
+        "under_floor": selection.under_floor,
+        "fits": {
+            law: {
+                "gains": f.gains,
+                "delay": f.delay,
+                "censored": f.censored,
+                "error": f.error,
+                "criterion": f.criterion,
+            }
+            for law, f in selection.fits.items()
+        },
+        "relative_errors": selection.relative_errors,
+    }
 
 
-def main() -> None:
+def validation() -> dict[str, Any]:
+    cases = []
+    for true in CASES + MISSPECIFIED:
+        attacks = [record(guidance.select(*attack(true, seed), DT), seed) for seed in range(ATTACKS)]
+        cases.append({"true": asdict(true), "attacks": attacks})
+        print(f"validation: {true}: {[a['chosen'] for a in attacks]}", flush=True)
+    return {"dt": DT, "attacks_per_case": ATTACKS, "cases": cases}
+
+
+def confusion() -> dict[str, Any]:
     rows = []
-    for true in CASES:
-        attacks = []
-        for seed in range(5):
-            selection = guidance.select(*attack(true, seed), DT)
-            own = selection.fits[true.law]
-            attacks.append(
-                {
-                    "seed": seed,
-                    "chosen": selection.chosen.law,
-                    "samples": own.samples,
-                    "gains": own.gains,
-                    "delay": own.delay,
-                    "censored": own.censored,
-                    "criteria": selection.criteria,
-                    "relative_errors": selection.relative_errors,
-                }
-            )
-        rows.append({"true": asdict(true), "attacks": attacks})
-    out = ROOT / "results" / "pursuit-law"
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "validation.json", json.dumps({"cases": rows}, indent=1) + "\n")
-    print("| law | made with | chosen as itself | its fitted gains (5 attacks) | delays (s) | error relative to none |")
-    print("|---|---|---:|---|---|---:|")
-    for row in rows:
-        true = TrueLaw(**row["true"])
-        own = [a["chosen"] for a in row["attacks"]]
-        hits = sum(c == true.law for c in own)
-        others = sorted({c for c in own if c != true.law})
-        gains = "; ".join(
-            ", ".join(f"{k} {v:.2f}" for k, v in a["gains"].items()) for a in row["attacks"] if a["gains"]
-        )
-        delays = ", ".join(f"{a['delay']:g}" for a in row["attacks"])
-        relative = np.median([a["relative_errors"][true.law] for a in row["attacks"]])
-        chosen = f"{hits} of 5" + (f" (else {', '.join(others)})" if others else "")
-        print(f"| {true.law} | {made_with(true)} | {chosen} | {gains or '-'} | {delays} | {relative:.3f} |")
-    profile_png(ROOT / "docs" / "figures" / "law-profile.png")
+    for true in CONFUSION:
+        cells: dict[str, Any] = {}
+        for n in LENGTHS:
+            found: list[dict[str, Any]] = []
+            skipped: list[int] = []
+            seed = FIRST_SEED
+            while len(found) < PER_CELL:
+                if seed >= FIRST_SEED + 50 * PER_CELL:
+                    raise RuntimeError(f"{true}: fewer than {PER_CELL} attacks of {n} samples in 500 seeds")
+                pursuer, target = attack(true, seed, DT, duration=(HISTORY + n) * DT)
+                if len(pursuer) == HISTORY + n + 1:
+                    found.append(record(guidance.select(pursuer, target, DT, HISTORY, HISTORY), seed))
+                else:
+                    skipped.append(seed)
+                seed += 1
+            cells[str(n)] = {"attacks": found, "skipped_seeds": skipped}
+            print(f"confusion: {true}, n {n}: {[a['chosen'] for a in found]}", flush=True)
+        rows.append({"true": asdict(true), "cells": cells})
+    return {
+        "dt": DT,
+        "history": HISTORY,
+        "lengths": list(LENGTHS),
+        "per_cell": PER_CELL,
+        "first_seed": FIRST_SEED,
+        "rows": rows,
+    }
 
 
 def profile_png(path: Path) -> None:
@@ -117,6 +178,19 @@ def profile_png(path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--parts", nargs="+", choices=("validation", "confusion"), default=["validation", "confusion"])
+    args = parser.parse_args()
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    if "validation" in args.parts:
+        atomic_write_text(RESULTS / "validation.json", json.dumps(validation(), indent=1) + "\n")
+        profile_png(ROOT / "docs" / "figures" / "law-profile.png")
+    if "confusion" in args.parts:
+        atomic_write_text(RESULTS / "confusion.json", json.dumps(confusion(), indent=1) + "\n")
+    print("written: results/pursuit-law/; the docs' tables: python scripts/law_tables.py")
 
 
 if __name__ == "__main__":

@@ -43,7 +43,8 @@ def _evaluation(run: report.RunResult, budget: int | None) -> dict[str, Any]:
 def rows() -> list[dict[str, Any]]:
     """One row per condition and variant: means over seeds (and over predators) with 95 %
     t-intervals over seeds; the margin over the better baseline paired by seed, with the
-    one-sided p-value of its paired t-test."""
+    one-sided p-values of its paired t-test each way, and those Holm-adjusted over the table's
+    rows (one family a direction)."""
     loaded: dict[Path, list[report.RunResult]] = {}
     table = []
     for condition in CONDITIONS:
@@ -64,6 +65,7 @@ def rows() -> list[dict[str, Any]]:
                 "margin": paired["mean"],
                 "margin_interval": paired["ci"],
                 "margin_p_greater": paired["p_greater"],
+                "margin_p_less": paired["p_less"],
                 "capture_rate": float(np.mean([e["capture_rate"] for e in chosen])),
                 "episode_length": float(np.mean([e["episode_length"] for e in chosen])),
             }
@@ -73,6 +75,9 @@ def rows() -> list[dict[str, Any]]:
                     row[key] = float(np.mean([np.mean([e[key][p] for p in predators]) for e in chosen]))
                     row[f"prey_{key}"] = float(np.mean([e[key]["prey_0"] for e in chosen]))
             table.append(row)
+    for side in ("margin_p_greater", "margin_p_less"):
+        for row, adjusted in zip(table, statistics.holm([r[side] for r in table]), strict=True):
+            row[f"{side}_holm"] = float(adjusted)
     return table
 
 
@@ -82,9 +87,10 @@ def _span(interval: list[float] | None) -> str:
 
 def markdown(table: list[dict[str, Any]]) -> str:
     lines = [
-        "| condition | predators | seeds | return as trained | best baseline | margin over it | p (margin > 0) "
+        "| condition | predators | seeds | return as trained | best baseline | margin over it "
+        "| p (margin > 0): raw / Holm | p (margin < 0): Holm "
         "| captures | collisions (contact steps) per predator-episode | the prey's |",
-        "|---|---|---|---|---|---|---:|---|---|---|",
+        "|---|---|---|---|---|---|---:|---:|---|---|---|",
     ]
     for r in table:
         if "obstacle_collisions" in r:
@@ -95,7 +101,8 @@ def markdown(table: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {r['condition']} | {r['variant']} | {r['seeds']} | {r['trained']:+.3f}{_span(r['trained_interval'])} "
             f"| {r['best_baseline']:+.3f} | {r['margin']:+.3f}{_span(r['margin_interval'])} "
-            f"| {r['margin_p_greater']:.3f} | {r['capture_rate']:.0%} | {hits} | {prey} |"
+            f"| {r['margin_p_greater']:.3f} / {r['margin_p_greater_holm']:.3f} | {r['margin_p_less_holm']:.3f} "
+            f"| {r['capture_rate']:.0%} | {hits} | {prey} |"
         )
     return "\n".join(lines) + "\n"
 

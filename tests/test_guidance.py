@@ -17,24 +17,27 @@ from pursuit_bench.study.synthetic_attacks import TrueLaw, attack
 
 DT = 0.1
 ATTACKS = 5
-#: (true law, whether the criterion must choose it in >= 4 of 5 attacks)
+#: (true law, the law chosen for each of the attacks of seeds 0 … 4): literal, as
+#: results/pursuit-law/validation.json and docs/pursuit-law.md give them.
 CASES = [
-    (TrueLaw("pp", k_gain=1.0), True),
-    (TrueLaw("pp", k_gain=3.0), True),
-    (TrueLaw("pp", k_gain=2.0, delay=0.1), True),
-    (TrueLaw("pn", n_gain=2.0), True),
-    (TrueLaw("pn", n_gain=3.0, delay=0.1), True),
-    (TrueLaw("pn", n_gain=5.0, delay=0.1), True),
-    (TrueLaw("pn", n_gain=5.0, delay=0.2), False),  # chosen in 3 of 5: docs/pursuit-law.md
-    (TrueLaw("mixed", n_gain=2.5, k_gain=2.0, delay=0.1), False),  # not identified: docs/pursuit-law.md
-    (TrueLaw("parallel"), True),
-    (TrueLaw("parallel", delay=0.2), True),
-    (TrueLaw("none"), True),
+    (TrueLaw("pp", k_gain=1.0), ("pp",) * 5),
+    (TrueLaw("pp", k_gain=3.0), ("pp",) * 5),
+    (TrueLaw("pp", k_gain=2.0, delay=0.1), ("pp",) * 5),
+    (TrueLaw("pn", n_gain=2.0), ("pn",) * 5),
+    (TrueLaw("pn", n_gain=3.0, delay=0.1), ("pn",) * 5),
+    (TrueLaw("pn", n_gain=5.0, delay=0.1), ("pn",) * 5),
+    (TrueLaw("pn", n_gain=5.0, delay=0.2), ("pn", "pn", "mixed", "mixed", "pn")),
+    # the mixed law is not identified: a single law is chosen for most of its attacks
+    (TrueLaw("mixed", n_gain=2.5, k_gain=2.0, delay=0.1), ("pn", "pn", "pn", "pn", "mixed")),
+    (TrueLaw("mixed", n_gain=1.0, k_gain=3.0, delay=0.1), ("pp", "pn", "mixed", "pn", "pp")),
+    (TrueLaw("parallel"), ("parallel",) * 5),
+    (TrueLaw("parallel", delay=0.2), ("parallel",) * 5),
+    (TrueLaw("none"), ("none",) * 5),
 ]
 
 
-@pytest.mark.parametrize(("true", "identified"), CASES, ids=lambda c: str(c) if isinstance(c, TrueLaw) else "")
-def test_synthetic_attacks_are_recovered(true: TrueLaw, identified: bool) -> None:
+@pytest.mark.parametrize(("true", "expected"), CASES, ids=lambda c: str(c) if isinstance(c, TrueLaw) else "")
+def test_synthetic_attacks_are_recovered(true: TrueLaw, expected: tuple[str, ...]) -> None:
     chosen, own = [], []
     for seed in range(ATTACKS):
         selection = guidance.select(*attack(true, seed), DT)
@@ -42,15 +45,80 @@ def test_synthetic_attacks_are_recovered(true: TrueLaw, identified: bool) -> Non
         own.append(selection.fits[true.law])
         held = min(selection.fits["pp"].error, selection.fits["pn"].error)
         assert selection.fits["mixed"].error <= held + 1e-12  # it holds both: never fits worse
-    if identified:
-        assert sum(c == true.law for c in chosen) >= 4, chosen
-    else:  # the law or a single law it holds, never one it does not
-        assert set(chosen) <= {true.law, "pn", "pp", "mixed"} and "pn" in chosen, chosen
+    assert tuple(chosen) == expected
     for name, value in (("N", true.n_gain), ("K", true.k_gain)):
+        # the mixed law's K is not identifiable (docs/pursuit-law.md): its N is
         if name in guidance.LAW_GAINS[true.law] and (true.law != "mixed" or name == "N"):
             close = [abs(f.gains[name] - value) <= 0.15 * value for f in own]
             assert sum(close) >= 4, [f.gains for f in own]
     assert sum(abs(f.delay - true.delay) <= DT + 1e-9 for f in own) >= 4, [f.delay for f in own]
+
+
+#: The misspecification control: laws flown as our predators fly (12 directions 30° apart, held
+#: one 0.1 s step, the velocity lagging as the env's damping makes it), seeds 0 … 4.
+FLOWN = [
+    (TrueLaw("pn", n_gain=2.0, directions=12, hold=0.1, velocity_lag=0.1 / np.log(4 / 3)),
+     ("pn", "pp", "pn", "pn", "mixed")),
+    (TrueLaw("parallel", directions=12, hold=0.1, velocity_lag=0.1 / np.log(4 / 3)),
+     ("pn", "mixed", "mixed", "mixed", "mixed")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("true", "expected"), FLOWN, ids=("pn", "parallel"))
+def test_pursuers_flown_as_our_predators_fly_are_called_pn_or_mixed(true: TrueLaw, expected: tuple[str, ...]) -> None:
+    selections = [guidance.select(*attack(true, seed), DT) for seed in range(ATTACKS)]
+    assert tuple(s.chosen.law for s in selections) == expected
+    for s in selections:  # reproduced almost as well as a true law: within 0.8 of going straight
+        assert s.relative_errors[s.chosen.law] < 0.8, s.relative_errors
+
+
+def test_the_flown_pursuer_steps_between_directions_and_lags() -> None:
+    """Flown without the lag, the velocity's direction takes only the 12 directions around the
+    line of sight; with it, the speed falls when the command turns (the push is spent turning)."""
+    sharp = TrueLaw("parallel", directions=12, hold=0.1)
+    pursuer, target = attack(sharp, seed=2, noise=0.0, dt=0.001)
+    steps = np.diff(pursuer, axis=0)
+    los = np.arctan2(*(target[:-1] - pursuer[:-1]).T[::-1])
+    relative = np.angle(np.exp(1j * (np.arctan2(steps[:, 1], steps[:, 0]) - los)))
+    # at each 0.1 s command the direction sits on a multiple of 30° from the line of sight
+    at_commands = relative[::100]
+    assert np.allclose(np.round(at_commands / (np.pi / 6)) * (np.pi / 6), at_commands, atol=1e-6)
+    lagged = TrueLaw("parallel", directions=12, hold=0.1, velocity_lag=0.35)
+    speeds = np.linalg.norm(np.diff(attack(lagged, seed=2, noise=0.0, dt=0.001)[0], axis=0), axis=1) / 0.001
+    assert speeds.min() < 1.0 - 0.05 < speeds.max()  # the commanded speed is 1.0–1.4
+    with pytest.raises(ValueError, match="need directions"):
+        TrueLaw("pn", n_gain=2.0, velocity_lag=0.35)
+
+
+def test_the_median_counts_fits_at_the_bound() -> None:
+    """A fit at the bound ranks above every interior fit: the median is the middle fit while fewer
+    than half sit there, and cannot be estimated from half on."""
+    median = pursuit_laws.censored_median
+    assert median([3.0, 1.0, 15.0, 2.0, 14.9], [None, None, "upper", None, "upper"]) == {
+        "median": 3.0, "side": None, "fits": 5, "lower": 0.0, "upper": 0.4,
+    }  # fmt: skip
+    assert median([1.0, 2.0, 15.0, 15.0], [None, None, "upper", "upper"])["side"] == "upper"
+    assert median([1.0, 2.0, 15.0, 15.0], [None, None, "upper", "upper"])["median"] is None
+    assert median([0.0, 0.0, 4.0], ["lower", "lower", None]) == {
+        "median": None, "side": "lower", "fits": 3, "lower": 2 / 3, "upper": 0.0,
+    }  # fmt: skip
+    # the interior median drops the bound: 2.0 here, against 3.0 counting it
+    assert np.median([1.0, 2.0, 3.0]) == 2.0
+    assert median([1.0, 2.0, 3.0, 15.0, 15.0], [None, None, None, "upper", "upper"])["median"] == 3.0
+    assert median([], [])["median"] is None
+    with pytest.raises(ValueError, match="one side per value"):
+        median([1.0], [])
+
+
+def test_ties_under_the_floor_are_listed() -> None:
+    """On a short attack made by pure pursuit, pp and the mixed law that holds it both fit within
+    the floor: they tie but for their parameters, and the one with fewer wins."""
+    pursuer, target = attack(TrueLaw("pp", k_gain=2.0, delay=0.1), seed=1000)
+    selection = guidance.select(pursuer[:14], target[:14], DT, 5, 5)
+    assert selection.chosen.law == "pp"
+    assert {"pp", "mixed"} <= set(selection.under_floor)
+    assert selection.criteria["pp"] < selection.criteria["mixed"]
+    assert all(selection.fits[law].error <= selection.floor for law in selection.under_floor)
 
 
 def naive_simulation(law, n_gain, k_gain, delay_steps, heading0, pursuer, target, start, substeps):
@@ -211,6 +279,9 @@ def test_the_law_command_on_a_run_and_on_a_sweep(tmp_path: Path) -> None:
     assert code == 0 and "1p-low hierarchical: law chosen most" in output, output
     summary = json.loads((sweep / "law.json").read_text())["summary"]
     assert set(summary["1p-low"]["hierarchical"]["chase"]["share"]) == set(guidance.LAWS)
+    n_gain = summary["1p-low"]["hierarchical"]["chase"]["gains"]["pn.N"]
+    assert set(n_gain["censored"]) == {"median", "side", "fits", "lower", "upper"}, n_gain
+    assert n_gain["censored"]["fits"] == sum(run["fits"] for run in n_gain["censored_per_run"])
     shipped = tmp_path / "shipped"
     code, output = run_cli("law", "--pretrained", "1p-low", "--episodes", "6", "--out", str(shipped))
     assert code == 0 and "always_chase predator_0: chase:" in output, output

@@ -1,12 +1,16 @@
 """The statistics module against hand computations, worked examples, scipy, and simulation."""
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import stats
 
 from pursuit_bench.study import report, statistics
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_the_paired_difference_and_its_t_interval_by_hand() -> None:
@@ -75,8 +79,8 @@ def test_a_tie_is_never_a_win() -> None:
 
 
 def test_classification_follows_the_corrected_tests() -> None:
-    def comparison(mean: float, greater: float, less: float) -> dict:
-        return {"mean": mean, "p_greater_holm": greater, "p_less_holm": less}
+    def comparison(mean: float, greater: float, less: float, equivalent: float = 1.0) -> dict:
+        return {"mean": mean, "p_greater_holm": greater, "p_less_holm": less, "p_equivalent_holm": equivalent}
 
     better = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(0.1, 0.02, 1.0)}
     assert statistics.classify(better) == "better"
@@ -84,6 +88,36 @@ def test_classification_follows_the_corrected_tests() -> None:
     assert statistics.classify(one_side) == "not resolved"
     worse = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(-0.05, 1.0, 0.01)}
     assert statistics.classify(worse) == "worse"
+    # the weaker baseline (the smaller deficit) significantly ahead, the stronger one too noisy to
+    # say: a fixed mode beats the learned switch, so the panel is worse
+    weaker_ahead = {"always_chase": comparison(-0.02, 1.0, 0.01), "always_stalk": comparison(-0.2, 1.0, 0.3)}
+    assert statistics.classify(weaker_ahead) == "worse"
+    # ahead of one, within the margin of the other: equivalent; within the margin of neither: not
+    level = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(0.01, 0.2, 0.5, 0.004)}
+    assert statistics.classify(level) == "equivalent"
+    both_level = {"always_chase": comparison(0.0, 0.5, 0.5, 0.01), "always_stalk": comparison(0.0, 0.5, 0.5, 0.02)}
+    assert statistics.classify(both_level) == "equivalent"
+    one_level = {"always_chase": comparison(0.0, 0.5, 0.5, 0.01), "always_stalk": comparison(0.0, 0.5, 0.5, 0.03)}
+    assert statistics.classify(one_level) == "not resolved"
+    # significance wins over equivalence: ahead of both is better even where within the margin
+    close_ahead = {b: comparison(0.02, 0.001, 1.0, 0.001) for b in ("always_chase", "always_stalk")}
+    assert statistics.classify(close_ahead) == "better"
+
+
+def test_paired_equivalence_against_a_worked_example() -> None:
+    # differences 0.01, 0.03, -0.01, 0.02, 0.00: mean 0.01, sd 0.015811, se 0.0070711, 4 df
+    d = [0.01, 0.03, -0.01, 0.02, 0.00]
+    result = statistics.paired_equivalence(d, 0.05)
+    # H0 difference >= +0.05: t = (0.01 - 0.05) / 0.0070711 = -5.6569, P(T4 <= t) = 0.0024063;
+    # H0 difference <= -0.05: t = 8.4853, smaller; the larger p is the first
+    assert result["p"] == pytest.approx(0.0024063, abs=2e-7)
+    # the 95 % t-interval 0.01 ± 2.7764 * 0.0070711 = [-0.009632, 0.029632]
+    assert result["bound"] == pytest.approx(0.029632, abs=1e-6)
+    assert statistics.paired_equivalence(d, result["bound"] * 0.99)["p"] > 0.025
+    assert statistics.paired_equivalence(d, result["bound"] * 1.01)["p"] < 0.025
+    assert statistics.paired_equivalence([0.02] * 4, 0.05)["p"] == 0.0  # no spread, inside
+    with pytest.raises(ValueError, match="margin"):
+        statistics.paired_equivalence(d, -0.1)
 
 
 def test_the_t_interval_covers_what_it_claims() -> None:
@@ -140,10 +174,39 @@ def test_the_slope_test_tells_a_trend_from_a_plateau() -> None:
     assert unresolved["verdict"] == "not resolved" and unresolved["detectable"] > 0.004
 
 
-def test_the_median_interval_needs_five_values_and_holds_the_median() -> None:
+def test_the_median_interval_against_the_exact_bootstrap_distribution() -> None:
     assert statistics.median_interval([1.0, 2.0, 3.0, 4.0], seed=0) is None
     assert statistics.median_interval([2.0] * 8, seed=0) is None
-    values = np.random.default_rng(0).lognormal(0.0, 0.5, 20)
-    low, high = statistics.median_interval(values, seed=0)  # type: ignore[misc]
-    assert low < np.median(values) < high
-    assert statistics.median_interval(values, seed=0) == [low, high]  # seeded: the same every time
+    # 0, 1, …, 10: a resample's median is at most k when 6 or more of its 11 draws are, so
+    # P(median <= k) = P(Binomial(11, (k + 1) / 11) >= 6): 0.007 at k = 1, 0.051 at 2, 0.949 at
+    # 7, 0.993 at 8. The 2.5 % and 97.5 % points of the bootstrap distribution are 2 and 8, more
+    # than five binomial standard errors of 2000 resamples from the steps: found whatever the seed.
+    values = np.arange(11.0)
+    for seed in (0, 1, 2, 3):
+        assert statistics.median_interval(values, seed=seed) == [2.0, 8.0]
+    assert stats.binom.sf(5, 11, 2 / 11) < 0.025 < stats.binom.sf(5, 11, 3 / 11)
+    assert stats.binom.sf(5, 11, 8 / 11) < 0.975 < stats.binom.sf(5, 11, 9 / 11)
+    skewed = np.random.default_rng(0).lognormal(0.0, 0.5, 20)
+    assert statistics.median_interval(skewed, seed=0) == statistics.median_interval(skewed, seed=0)  # seeded
+
+
+@pytest.mark.slow
+def test_statistics_md_prints_what_its_script_gives() -> None:
+    """docs/statistics.md's coverage table and skewness figures are what
+    scripts/interval_coverage.py computes (seeded: the same every time)."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        import interval_coverage
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    text = (ROOT / "docs" / "statistics.md").read_text()
+    assert interval_coverage.coverage_markdown() in text
+    figures = interval_coverage.skewness_figures()
+    ours, normal, mild, strong = (f"{v:+.2f}".replace("-", "−") for v in figures.values())
+    normal = normal.lstrip("+−") if normal in ("+0.00", "−0.00") else normal
+    words = " ".join(text.split())
+    assert f"sample skewness of {ours};" in words
+    assert (
+        f"normal data give {normal}, the lognormal with σ = 0.25 of the test {mild} and the one with σ = 0.5 {strong}"
+        in words
+    )

@@ -41,13 +41,14 @@ def report(where: Path, out: Path | None) -> None:
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(
-        f"{totals['panels']} panels: {totals['better']} better, {totals['not resolved']} not resolved, "
-        f"{totals['worse']} worse (paired by seed, Holm-corrected); highest mean in {totals['hierarchical_best']}"
+        f"{totals['panels']} panels: {totals['better']} better, {totals['equivalent']} equivalent, "
+        f"{totals['not resolved']} not resolved, {totals['worse']} worse (paired by seed, Holm-corrected); "
+        f"highest mean in {totals['hierarchical_best']}"
     )
     for row in totals["budgets"]:
         click.echo(
-            f"  at {row['episodes']} episodes: {row['better']} better, {row['not resolved']} not resolved, "
-            f"{row['worse']} worse"
+            f"  at {row['episodes']} episodes: {row['better']} better, {row['equivalent']} equivalent, "
+            f"{row['not resolved']} not resolved, {row['worse']} worse"
         )
     click.echo(f"written in {out or where}: {', '.join(totals['written'])}")
 

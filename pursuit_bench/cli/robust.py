@@ -76,9 +76,9 @@ def robust(
     except ValueError as error:
         raise BadInput(str(error)) from None
     atomic_write_text(where / "robust.json", json.dumps(result, indent=2) + "\n")
-    atomic_write_text(where / "robust.md", robustness.markdown(result) + "\n" + robustness.chase_markdown(result))
+    atomic_write_text(where / "robust.md", robustness.markdown(result))
     atomic_write_bytes(where / "robust.png", robust_png(result))
-    click.echo(robustness.markdown(result))
+    click.echo(robustness.families_markdown(result))
     click.echo(f"written: robust.json, robust.md, robust.png in {where}")
 
 

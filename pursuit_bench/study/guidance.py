@@ -33,15 +33,20 @@ every law and delay.
 Model selection (:func:`select`): the Bayesian information criterion under a stated error
 model: each simulated sample's position error is an independent isotropic Gaussian, its mean
 square distance ``msd = RSS / n`` over the n samples after ``start`` estimating its variance,
-floored at :data:`PRECISION` ² (the positions' precision: below it errors are noise);
-``BIC = n ln msd + k ln n`` with k each law's count of free parameters (:data:`PARAMETERS`,
-the delay included). One observation per sample (not per coordinate) is the conservative count:
-neighbouring samples' errors are correlated, so the data hold fewer independent observations
-than samples, never more. The fit's quality is its error relative to ``"none"``.
+floored at the square of the larger of :data:`PRECISION` and :data:`TOLERANCE` times the
+distance the pursuer travels after ``start`` (below it errors are the positions' noise or the
+simulation's own); ``BIC = n ln msd + k ln n`` with k each law's count of free parameters
+(:data:`PARAMETERS`, the delay included). One observation per sample (not per coordinate) is
+the conservative count: neighbouring samples' errors are correlated, so the data hold fewer
+independent observations than samples, never more. Laws whose errors are both under the floor
+tie but for k: the one with fewer parameters wins, and between equal k the first in
+:data:`LAWS` (:attr:`Selection.under_floor`; on short attacks this decides many choices,
+docs/pursuit-law.md). The fit's quality is its error relative to ``"none"``.
 
 Gains are bounded (:data:`GAIN_BOUNDS`) and delays run over 0 … ``max_delay`` samples; a fit
 whose optimum lies at a bound is *censored* there (:attr:`LawFit.censored`): reported as
-``">15"``, never averaged with interior fits.
+``">15"``, never averaged with interior fits (a median that counts them:
+:func:`pursuit_bench.study.pursuit_laws.censored_median`).
 """
 
 from __future__ import annotations
@@ -110,6 +115,15 @@ class Selection:
     """The fit of the law with the lowest criterion."""
     fits: dict[str, LawFit]
     """Every law's fit, by name."""
+    floor: float = float("nan")
+    """The error (RMS distance) below which laws are not told apart (:data:`TOLERANCE`)."""
+
+    @property
+    def under_floor(self) -> list[str]:
+        """The laws whose error is at or below :attr:`floor`: their criteria differ only by their
+        counts of parameters, so among them the one with the fewest wins, and among equal counts
+        the first in :data:`LAWS` (``"pp"`` before ``"pn"``): a choice the data do not make."""
+        return [law for law, f in self.fits.items() if f.error <= self.floor]
 
     @property
     def criteria(self) -> dict[str, float]:
@@ -504,7 +518,7 @@ def select(
         held = tuple(_values(fits[single], attack) for single in ("pp", "pn")) if law == "mixed" else ()
         fits[law] = _law_fit(law, attack, int(max_delay), held)
     ordered = {law: fits[law] for law in LAWS if law in fits}
-    return Selection(min(ordered.values(), key=lambda f: f.criterion), ordered)
+    return Selection(min(ordered.values(), key=lambda f: f.criterion), ordered, _floor(attack))
 
 
 def _values(fitted: LawFit, attack: _Attack) -> np.ndarray:

@@ -283,14 +283,15 @@ def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
 
 
 def budget_png(rows: list[dict[str, Any]]) -> bytes:
-    """The verdicts against the training budget: panels better, not resolved and worse (Holm-
-    corrected paired tests at each budget), and the strict count per seed (mean, least to most)
+    """The verdicts against the training budget: panels better, equivalent, not resolved and worse
+    (Holm-corrected paired tests at each budget), and the strict count per seed (mean, least to most)
     beside the paper's 16."""
     fig, ax = plt.subplots(figsize=(7.0, 4.8))
     episodes = [r["episodes"] for r in rows]
     panels = rows[-1]["panels"]
     for key, label, style, color in (
         ("better", "better (significant against both baselines)", "o-", TRAINED_COLOR),
+        ("equivalent", "equivalent (within ±0.05 of the better baseline)", "^-", "#8172b3"),
         ("not resolved", "not resolved", "s--", "grey"),
         ("worse", "worse (a baseline significantly ahead)", "v-", "#c44e52"),
     ):

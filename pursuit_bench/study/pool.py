@@ -36,11 +36,7 @@ from pursuit_bench.study.report import p_text, span_text
 FORMAT = "pursuit-bench-pool-1"
 KINDS = ("hierarchical", "flat")
 FLEEING = "FleeingPrey"
-#: The equivalence margin, in return per episode (a capture is worth 1): five captures in a
-#: hundred episodes. The larger of the reproduction's power margins (REPRODUCTION.md); at 0.05 a
-#: panel's two kinds differ by less than the gap between always-chase and always-stalk in any
-#: panel where the fixed modes differ at all.
-EQUIVALENCE_MARGIN = 0.05
+EQUIVALENCE_MARGIN = statistics.EQUIVALENCE_MARGIN
 VERDICTS = ("rule helps", "flat better", "equivalent", "not resolved")
 
 

@@ -150,17 +150,42 @@ def attacks(
     return found
 
 
+def censored_median(values: list[float], sides: list[str | None]) -> dict[str, Any]:
+    """The median of fitted gains that counts the fits censored at a bound (``sides``: ``None``
+    for an interior fit, ``"lower"`` or ``"upper"``): a fit at the upper bound of 15 says only
+    "N ≥ 15", but it ranks above every interior fit, and the median needs only ranks. With fewer
+    than half the fits at each bound, the middle of the sorted fits is interior, so the median is
+    the ordinary median of every fit (the censored ones at the bound where they sit), which is
+    then also the Kaplan–Meier median for censoring at one fixed bound. With half or more at a
+    bound it cannot be estimated: only the bound is known (``"side"``: ``"upper"``, written
+    ``">15"``, or ``"lower"``). Returns ``{"median", "side", "fits", "lower", "upper"}`` (shares at each
+    bound; median ``None`` with no fit or none estimable)."""
+    if len(values) != len(sides):
+        raise ValueError(f"{len(values)} values and {len(sides)} sides: expected one side per value")
+    count = len(values)
+    lower = sum(s == "lower" for s in sides) / count if count else 0.0
+    upper = sum(s == "upper" for s in sides) / count if count else 0.0
+    side = "upper" if count and upper >= 0.5 else "lower" if count and lower >= 0.5 else None
+    median = float(np.median(values)) if count and side is None else None
+    return {"median": median, "side": side, "fits": count, "lower": lower, "upper": upper}
+
+
 def _gain_summary(values: list[float], sides: list[str | None], seed: int) -> dict[str, Any]:
     """Over attacks: the median of the interior fits with its 95 % interval
-    (:func:`statistics.median_interval`) and the fraction at each bound."""
+    (:func:`statistics.median_interval`; biased towards the middle of the range when fits sit
+    at a bound), the fraction at each bound, and the median that counts the censored fits
+    (:func:`censored_median`)."""
     interior = np.array([v for v, s in zip(values, sides, strict=True) if s is None])
     count = max(len(values), 1)
+    censored = censored_median(values, sides)
     summary: dict[str, Any] = {
         "median": float(np.median(interior)) if len(interior) else None,
         "ci": statistics.median_interval(interior, seed),
         "interior": len(interior),
         "lower": sum(s == "lower" for s in sides) / count,
         "upper": sum(s == "upper" for s in sides) / count,
+        "censored_median": censored["median"],
+        "censored_side": censored["side"],
     }
     return summary
 
@@ -280,8 +305,11 @@ def analyse(
 
 def over_seeds(per_run: list[dict[str, Any]]) -> dict[str, Any]:
     """A sweep's law.json: per condition, predator kind and phase, over seeds (runs: the unit of
-    replication), the mean share of attacks each law is chosen for with its 95 % t-interval,
-    and the mean of each run's median interior gain of the law chosen most."""
+    replication), the mean share of attacks each law is chosen for with its 95 % t-interval;
+    per gain of ``pp``, ``pn`` and ``mixed`` the mean of each run's median *interior* fit with
+    its t-interval (biased towards the range's middle where fits sit at a bound), and the
+    median that counts the censored fits (:func:`censored_median`) over every fit of the runs
+    pooled (``"censored"``) and per run (``"censored_per_run"``)."""
     grouped: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for result in per_run:
         for kind, predators in result["kinds"].items():
@@ -305,24 +333,30 @@ def over_seeds(per_run: list[dict[str, Any]]) -> dict[str, Any]:
             phase_entry["winner"] = max(means, key=lambda law: means[law]) if usable else None
             for law in ("pp", "pn", "mixed"):
                 for gain in guidance.LAW_GAINS[law]:
-                    medians = []
+                    medians, every, every_side, run_medians = [], [], [], []
                     for run in runs:
-                        values = [
-                            v
+                        fitted = [
+                            (v, c.get(gain))
                             for fits in run.values()
                             for v, c in zip(
                                 fits[phase]["laws"][law]["gains"][gain],
                                 fits[phase]["laws"][law]["censored"],
                                 strict=True,
                             )
-                            if gain not in c
                         ]
+                        values = [v for v, side in fitted if side is None]
                         if values:
                             medians.append(float(np.median(values)))
+                        every += [v for v, _ in fitted]
+                        every_side += [side for _, side in fitted]
+                        if fitted:
+                            run_medians.append(censored_median([v for v, _ in fitted], [side for _, side in fitted]))
                     phase_entry["gains"][f"{law}.{gain}"] = {
                         "mean": float(np.mean(medians)) if medians else None,
                         "ci": statistics.t_interval(np.array(medians)),
                         "runs": len(medians),
+                        "censored": censored_median(every, every_side),
+                        "censored_per_run": run_medians,
                     }
             entry[phase] = phase_entry
         summary.setdefault(condition, {})[kind] = entry

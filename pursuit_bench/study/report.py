@@ -15,6 +15,7 @@ the tables and figures.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import gzip
 import itertools
@@ -198,14 +199,21 @@ def panel_table(results: list[RunResult]) -> list[dict[str, Any]]:
     return table
 
 
-def judge(table: list[dict[str, Any]], alpha: float = statistics.ALPHA) -> dict[str, int]:
+def judge(
+    table: list[dict[str, Any]], alpha: float = statistics.ALPHA, margin: float = statistics.EQUIVALENCE_MARGIN
+) -> dict[str, int]:
     """Holm's correction over the family of paired comparisons in ``table`` (every panel
-    against both baselines), each direction its own family at ``alpha``; writes the adjusted
-    p-values into each comparison and the panel's ``verdict`` (:func:`statistics.classify`).
-    Returns the count of each verdict."""
+    against both baselines), each direction its own family at ``alpha``, and the equivalence
+    tests within ``margin`` (two one-sided paired tests, :func:`statistics.paired_equivalence`) a
+    third family; writes the adjusted p-values into each comparison and the panel's ``verdict``
+    (:func:`statistics.classify`: better, equivalent, not resolved or worse). Returns the count
+    of each verdict."""
     comparisons = [c for t in table for c in t.get("paired", {}).values()]
     if comparisons:
-        for side in ("p_greater", "p_less"):
+        for c in comparisons:
+            c["equivalence"] = statistics.paired_equivalence(c["differences"], margin)
+            c["p_equivalent"] = c["equivalence"]["p"]
+        for side in ("p_greater", "p_less", "p_equivalent"):
             adjusted = statistics.holm([c[side] for c in comparisons])
             for c, value in zip(comparisons, adjusted, strict=True):
                 c[f"{side}_holm"] = float(value)
@@ -217,7 +225,33 @@ def judge(table: list[dict[str, Any]], alpha: float = statistics.ALPHA) -> dict[
     return counts
 
 
-VERDICTS = ("better", "not resolved", "worse")
+VERDICTS = statistics.VERDICTS
+
+
+#: Equivalence margins the sensitivity table re-judges a budget at, beside the chosen one.
+SENSITIVITY_MARGINS = (0.02, statistics.EQUIVALENCE_MARGIN, 0.1)
+
+
+def margin_sensitivity(table: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The verdict counts of ``table`` re-judged at each of :data:`SENSITIVITY_MARGINS`: only
+    *equivalent* and *not resolved* can trade panels (the margin enters no other test)."""
+    return [{"margin": m, **judge(copy.deepcopy(table), margin=m)} for m in SENSITIVITY_MARGINS]
+
+
+def verdicts_by_condition(table: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per condition, how many of its judged panels got each verdict: a condition's predators
+    share runs (the same seeds, the same prey), so its panels are not independent findings."""
+    rows = []
+    for condition in dict.fromkeys(t["condition"] for t in table if "verdict" in t):
+        panels = [t for t in table if t["condition"] == condition and "verdict" in t]
+        rows.append(
+            {
+                "condition": condition,
+                "panels": len(panels),
+                **{v: sum(t["verdict"] == v for t in panels) for v in VERDICTS},
+            }
+        )
+    return rows
 
 
 def above_both_on_means(table: list[dict[str, Any]]) -> int:
@@ -350,8 +384,8 @@ def by_budget(results: list[RunResult]) -> dict[int, list[RunResult]]:
 
 
 def budget_table(results: list[RunResult]) -> list[dict[str, Any]]:
-    """Per training budget, its own family of tests: the panels better, not resolved and worse
-    (Holm-corrected paired tests), the strict count on the means over seeds (ties no win), and
+    """Per training budget, its own family of tests: the panels better, equivalent, not resolved
+    and worse (Holm-corrected paired tests), the strict count on the means over seeds (ties no win), and
     the strict count per seed (mean, least, most)."""
     rows = []
     for episodes, evaluated in by_budget(results).items():
@@ -388,7 +422,8 @@ def margins_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
                     {"condition": t["condition"], "predator": t["predator"], "baseline": baseline, "budgets": {}},
                 )
                 row["budgets"][str(episodes)] = {
-                    k: c[k] for k in ("n", "mean", "ci", "p_greater_holm", "p_less_holm", "differences")
+                    k: c[k]
+                    for k in ("n", "mean", "ci", "p_greater_holm", "p_less_holm", "p_equivalent_holm", "differences")
                 }
     return list(rows.values())
 
@@ -397,13 +432,16 @@ def margins_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
 #: of training (an equivalence bound for the slope test).
 STEADY_CHANGE = 0.02
 LAST_PART = 0.3
+#: The fewest budgets the slope test looks at: with budgets spread out (15,000 … 150,000
+#: episodes) the last 30 % may hold only the final one, so the window reaches back to hold three.
+LAST_BUDGETS = 3
 
 
 def convergence(results: list[RunResult]) -> list[dict[str, Any]]:
     """Per panel, whether the margin over its better baseline (per seed, the trained predator's
     return minus the higher of the baselines' on that seed's evaluation) still moves over the
     last 30 % of training: the evaluations kept there (``--keep-checkpoints``) and the final
-    one, a least-squares slope per seed, the slopes' t-interval over seeds
+    one (at least the last three budgets), a least-squares slope per seed, the slopes' t-interval over seeds
     (:func:`statistics.slope_test`, episodes in thousands): ``rising``, ``falling``, ``flat``
     (the interval within ±0.02 over that stretch) or ``not resolved``, with the slope the test
     would have detected."""
@@ -412,7 +450,7 @@ def convergence(results: list[RunResult]) -> list[dict[str, Any]]:
     if not budgets:
         return rows
     final = max(budgets)
-    window = [e for e in budgets if e >= (1 - LAST_PART) * final]
+    window = sorted(set([e for e in budgets if e >= (1 - LAST_PART) * final] + list(budgets)[-LAST_BUDGETS:]))
     if len(window) < 2:
         return rows
     span = (max(window) - min(window)) / 1000
@@ -484,20 +522,47 @@ def p_text(value: float | None) -> str:
 
 def classification_markdown(table: list[dict[str, Any]]) -> str:
     """The claim panel by panel: the verdict, and against each baseline the mean paired
-    difference over seeds, its 95 % t-interval and the Holm-adjusted one-sided p-value in the
-    verdict's direction."""
+    difference over seeds with its 95 % t-interval and three Holm-adjusted p-values: the
+    trained predator ahead, behind, and within the equivalence margin."""
     lines = [
-        "| condition | predator | verdict | − always chase [95 % t-interval] | p (Holm) "
-        "| − always stalk [95 % t-interval] | p (Holm) |",
+        "| condition | predator | verdict | − always chase [95 % t-interval] | p ahead / behind / equivalent (Holm) "
+        "| − always stalk [95 % t-interval] | p ahead / behind / equivalent (Holm) |",
         "|---|---|---|---:|---:|---:|---:|",
     ]
     for t in (t for t in table if "paired" in t):
         cells = []
         for b in BASELINES:
             c = t["paired"][b]
-            side = "p_less_holm" if t["verdict"] == "worse" else "p_greater_holm"
-            cells += [f"{c['mean']:+.3f}{span_text(c['ci'])}", p_text(c.get(side))]
+            sides = ("p_greater_holm", "p_less_holm", "p_equivalent_holm")
+            cells += [f"{c['mean']:+.3f}{span_text(c['ci'])}", " / ".join(p_text(c.get(side)) for side in sides)]
         lines.append(f"| {t['condition']} | {t['predator']} | **{t['verdict']}** | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def sensitivity_markdown(rows: list[dict[str, Any]]) -> str:
+    """The verdict counts at each equivalence margin of :func:`margin_sensitivity`."""
+    lines = ["| equivalence margin | " + " | ".join(VERDICTS) + " |", "|---:|" + "---:|" * len(VERDICTS)]
+    for r in rows:
+        lines.append(f"| ±{r['margin']:g} | " + " | ".join(str(r[v]) for v in VERDICTS) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def by_condition_markdown(rows: list[dict[str, Any]]) -> str:
+    """The verdicts counted by condition beside the panels' total (a condition's panels share runs)."""
+    lines = [
+        "| condition | panels | " + " | ".join(VERDICTS) + " |",
+        "|---|---:|" + "---:|" * len(VERDICTS),
+    ]
+    for r in rows:
+        lines.append(f"| {r['condition']} | {r['panels']} | " + " | ".join(str(r[v]) for v in VERDICTS) + " |")
+    totals = {v: sum(r[v] for r in rows) for v in VERDICTS}
+    conditions = {v: sum(r[v] > 0 for r in rows) for v in VERDICTS}
+    lines.append(
+        f"| **panels** | {sum(r['panels'] for r in rows)} | " + " | ".join(str(totals[v]) for v in VERDICTS) + " |"
+    )
+    lines.append(
+        f"| **conditions with one or more** | {len(rows)} | " + " | ".join(str(conditions[v]) for v in VERDICTS) + " |"
+    )
     return "\n".join(lines) + "\n"
 
 
@@ -605,6 +670,35 @@ def prey_table(results: list[RunResult]) -> list[dict[str, Any]]:
     return rows
 
 
+def prey_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
+    """:func:`prey_table` at every budget the hierarchical runs were evaluated at: whether the
+    learned prey still beats ``FleeingPrey`` as training goes on (a prey that stops learning
+    moves every margin)."""
+    return [{"episodes": episodes, "rows": prey_table(runs)} for episodes, runs in by_budget(results).items()]
+
+
+def prey_budget_markdown(budgets: list[dict[str, Any]]) -> str:
+    """The learned prey against ``FleeingPrey`` at each budget: per condition, the greedy prey's
+    return beside FleeingPrey's in its place, and the seeds where the learned prey does better."""
+    conditions = list(dict.fromkeys(r["condition"] for b in budgets for r in b["rows"]))
+    lines = [
+        "| condition | " + " | ".join(f"{b['episodes']} episodes" for b in budgets) + " |",
+        "|---|" + "---:|" * len(budgets),
+    ]
+    for condition in conditions:
+        cells = []
+        for b in budgets:
+            row = next((r for r in b["rows"] if r["condition"] == condition), None)
+            cells.append(
+                "–"
+                if row is None
+                else f"{row['greedy']['return']:+.2f} / {row['fleeing_prey']['return']:+.2f} "
+                f"({row['beats_fleeing_prey']} of {row['seeds']})"
+            )
+        lines.append(f"| {condition} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def flat_table(results: list[RunResult]) -> list[dict[str, Any]]:
     """The flat ablation against the hierarchical predator at the same budget, per condition:
     each kind's margin over its own better baseline (its runs' own evaluations, against its own
@@ -676,13 +770,14 @@ def prey_markdown(rows: list[dict[str, Any]]) -> str:
 def budget_markdown(rows: list[dict[str, Any]]) -> str:
     """The verdicts against budget as a markdown table (REPRODUCTION.md quotes it)."""
     lines = [
-        "| episodes per run | runs | panels | better | not resolved | worse | highest mean (strict) "
+        "| episodes per run | runs | panels | better | equivalent | not resolved | worse | highest mean (strict) "
         "| per-seed strict count: mean (least–most) |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['episodes']} | {r['runs']} | {r['panels']} | {r['better']} | {r['not resolved']} | {r['worse']} "
+            f"| {r['episodes']} | {r['runs']} | {r['panels']} | {r['better']} | {r['equivalent']} "
+            f"| {r['not resolved']} | {r['worse']} "
             f"| {r['hierarchical_best']} | {r['per_seed_mean']:.1f} ({r['per_seed_min']}–{r['per_seed_max']}) |"
         )
     return "\n".join(lines) + "\n"
@@ -730,7 +825,10 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
         "close_calls": close_calls(results, table),
         "improvement": improvement(results, table),
         "alpha_per_direction": statistics.ALPHA,
+        "equivalence_margin": statistics.EQUIVALENCE_MARGIN,
         "comparisons": sum(len(t.get("paired", {})) for t in table),
+        "by_condition": verdicts_by_condition(table),
+        "margin_sensitivity": margin_sensitivity(table),
     }
     power = power_table(table)
     learning = curves(results)
@@ -738,6 +836,7 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
     forest = margins_by_budget(results)
     converged = convergence(results)
     prey = prey_table(results)
+    prey_budgets = prey_by_budget(results)
     flat = flat_table(results)
     payload = {
         "sweep": str(where),
@@ -748,6 +847,7 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
         "margins": forest,
         "convergence": converged,
         "prey": prey,
+        "prey_by_budget": prey_budgets,
         "flat": flat,
         "curves": learning,
     }
@@ -757,11 +857,12 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             "",
             f"Seeds are the unit: each panel's difference from each baseline is paired by seed (same prey, same "
             f"evaluation episodes), with a 95 % t-interval over seeds and a one-sided paired t-test per direction, "
-            f"Holm-corrected over the {totals['comparisons']} comparisons at {statistics.ALPHA} a direction "
+            f"Holm-corrected over the {totals['comparisons']} comparisons at {statistics.ALPHA} a direction, and "
+            f"two one-sided paired tests for equivalence within ±{statistics.EQUIVALENCE_MARGIN} (Holm alike) "
             "(docs/statistics.md).",
             "",
-            f"- **{totals['better']} better, {totals['not resolved']} not resolved, {totals['worse']} worse** "
-            f"of {totals['panels']} panels.",
+            f"- **{totals['better']} better, {totals['equivalent']} equivalent, {totals['not resolved']} not "
+            f"resolved, {totals['worse']} worse** of {totals['panels']} panels.",
             f"- Highest mean of it and the two baselines (strictly; the paper's count on means over seeds): "
             f"{totals['hierarchical_best']}.",
             f"- Per-seed decisions within two paired standard errors of the evaluation's episode noise: "
@@ -770,6 +871,12 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             "## Panel by panel",
             "",
             classification_markdown(table),
+            "## Verdicts by condition",
+            "",
+            by_condition_markdown(totals["by_condition"]),
+            "## The verdicts at other equivalence margins",
+            "",
+            sensitivity_markdown(totals["margin_sensitivity"]),
             "## The paper's strict count, seed by seed",
             "",
             counts_markdown(counts),
@@ -791,6 +898,10 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             "## The learned prey (hierarchical runs, final budget)",
             "",
             prey_markdown(prey),
+            "## The learned prey against FleeingPrey at each budget (greedy return: learned / FleeingPrey, seeds "
+            "where the learned prey does better)",
+            "",
+            prey_budget_markdown(prey_budgets),
             "## The flat ablation at the same budget",
             "",
             flat_markdown(flat) if flat else "No condition has two or more runs of both kinds.\n",

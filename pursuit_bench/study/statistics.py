@@ -28,6 +28,11 @@ CONFIDENCE = 0.95
 #: for the family by Holm's procedure, excludes zero on that side.
 ALPHA = 0.025
 RESAMPLES = 2000
+#: The equivalence margin of every four-verdict table, in return per episode (a capture is worth
+#: 1): five captures in a hundred episodes, the larger of the reproduction's power margins
+#: (REPRODUCTION.md). A choice, fixed (for the pool study) before it was applied to the
+#: reproduction's panels and the robustness study; the report re-judges at ±0.02 and ±0.1 beside it.
+EQUIVALENCE_MARGIN = 0.05
 
 
 def t_interval(values: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE) -> list[float] | None:
@@ -156,16 +161,47 @@ def holm(pvalues: Sequence[float] | np.ndarray) -> np.ndarray:
     return adjusted
 
 
+def paired_equivalence(differences: Sequence[float] | np.ndarray, margin: float) -> dict[str, Any]:
+    """Two one-sided paired t-tests (TOST) that the mean of seed-level ``differences`` lies inside
+    ``(-margin, +margin)``: ``p`` is the larger of the two one-sided p-values (equivalence is shown
+    at level alpha when ``p <= alpha``, that is when the ``1 - 2 alpha`` t-interval lies inside the
+    margin); ``bound`` is the smallest margin this data would show equivalence at (alpha 0.025),
+    ``max(|low|, |high|)`` of the 95 % t-interval."""
+    if not margin > 0:
+        raise ValueError(f"margin={margin!r}: expected a positive equivalence margin")
+    d = np.asarray(differences, dtype=float)
+    if d.ndim != 1 or len(d) < 2:
+        raise ValueError(f"paired equivalence needs two or more seed-level differences, got shape {d.shape}")
+    mean, sd, n = float(d.mean()), float(d.std(ddof=1)), len(d)
+    if sd == 0:
+        p = 0.0 if abs(mean) < margin else 1.0
+    else:
+        se = sd / np.sqrt(n)
+        above = float(stats.t.sf((mean + margin) / se, n - 1))  # H0: difference <= -margin
+        below = float(stats.t.cdf((mean - margin) / se, n - 1))  # H0: difference >= +margin
+        p = max(above, below)
+    low, high = t_interval(d, 1 - 2 * ALPHA) or [mean, mean]
+    return {"margin": margin, "p": p, "bound": max(abs(low), abs(high))}
+
+
+#: A panel's four verdicts (:func:`classify`), in the order the reports print them.
+VERDICTS = ("better", "equivalent", "not resolved", "worse")
+
+
 def classify(comparisons: dict[str, dict[str, Any]], alpha: float = ALPHA) -> str:
     """A panel's verdict from its comparisons with each baseline (:func:`paired_difference`
-    results carrying Holm-adjusted ``p_greater_holm`` and ``p_less_holm``): ``better`` when the
-    trained predator is significantly ahead of every baseline, ``worse`` when the baseline with
-    the higher mean is significantly ahead of it, else ``not resolved``."""
+    results carrying Holm-adjusted ``p_greater_holm``, ``p_less_holm`` and, for equivalence,
+    ``p_equivalent_holm``): ``worse`` when any baseline is significantly ahead of the trained
+    predator; ``better`` when it is significantly ahead of every baseline; ``equivalent`` when,
+    against every baseline, it is either significantly ahead or within the equivalence margin
+    (two one-sided tests): no baseline is better by the margin or more, and it is not shown
+    better than all; else ``not resolved``."""
+    if any(c["p_less_holm"] <= alpha for c in comparisons.values()):
+        return "worse"
     if all(c["p_greater_holm"] <= alpha for c in comparisons.values()):
         return "better"
-    strongest = min(comparisons.values(), key=lambda c: c["mean"])  # the baseline furthest ahead
-    if strongest["p_less_holm"] <= alpha:
-        return "worse"
+    if all(c["p_greater_holm"] <= alpha or c.get("p_equivalent_holm", 1.0) <= alpha for c in comparisons.values()):
+        return "equivalent"
     return "not resolved"
 
 
