@@ -323,6 +323,38 @@ def budget_png(rows: list[dict[str, Any]]) -> bytes:
     return _png(fig)
 
 
+def margins_png(rows: list[dict[str, Any]]) -> bytes:
+    """Each panel's margin over its better baseline against the training budget (log axis): the
+    mean over seeds with its 95 % t-interval, a panel a line, a condition a colour."""
+    budgets = sorted({int(b) for r in rows for b in r["budgets"]})
+    conditions = list(dict.fromkeys(r["condition"] for r in rows))
+    colors = matplotlib.colormaps["tab10"]
+    fig, ax = plt.subplots(figsize=(7.0, 4.8))
+    for r in rows:
+        k = conditions.index(r["condition"])
+        shown = [b for b in budgets if str(b) in r["budgets"]]
+        means = np.array([r["budgets"][str(b)]["mean"] for b in shown])
+        cis = [r["budgets"][str(b)]["ci"] for b in shown]
+        offset = 1 + 0.03 * (int(r["predator"].removeprefix("predator_")) - 1)  # panels of a condition side by side
+        x = np.array(shown, dtype=float) * offset
+        ax.plot(
+            x, means, "o-", color=colors(k), ms=4, lw=1, label=r["condition"] if r["predator"] == "predator_0" else None
+        )
+        if all(ci is not None for ci in cis):
+            low, high = np.array(cis).T
+            ax.vlines(x, low, high, color=colors(k), lw=0.8)
+    ax.axhline(0, color="grey", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_xticks(budgets, [f"{b / 1000:g}k" for b in budgets], fontsize=8)
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_xlabel("training episodes per run (log)")
+    ax.set_ylabel("margin over the better baseline (return)")
+    ax.legend(fontsize=7, ncol=2)
+    ax.set_title("Margins against the training budget (mean over seeds, 95 % t-interval)", fontsize=10)
+    fig.tight_layout()
+    return _png(fig)
+
+
 def forest_png(rows: list[dict[str, Any]]) -> bytes:
     """The paired differences (hierarchical minus baseline, mean over seeds), one row per panel
     and baseline, at every budget evaluated (a marker each), each with its 95 % t-interval; rows

@@ -428,6 +428,43 @@ def margins_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
     return list(rows.values())
 
 
+def margin_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
+    """Per panel, its margin over the better baseline at every budget: per seed the trained
+    predator's return minus the higher of the two baselines' on that seed's evaluation, the mean
+    over seeds and its 95 % t-interval (the figure of margins against budget)."""
+    budgets = by_budget(results)
+    tables = {e: panel_table(runs) for e, runs in budgets.items()}
+    rows: list[dict[str, Any]] = []
+    for episodes, table in tables.items():
+        for t in (t for t in table if "paired" in t):
+            v = t["variants"]
+            margins = np.array(v["hierarchical"]["values"]) - np.maximum(*(np.array(v[b]["values"]) for b in BASELINES))
+            row = next((r for r in rows if (r["condition"], r["predator"]) == (t["condition"], t["predator"])), None)
+            if row is None:
+                row = {"condition": t["condition"], "predator": t["predator"], "budgets": {}}
+                rows.append(row)
+            row["budgets"][str(episodes)] = {
+                "seeds": len(margins),
+                "mean": float(margins.mean()),
+                "ci": statistics.t_interval(margins),
+                "values": margins.tolist(),
+            }
+    return rows
+
+
+def margin_budget_markdown(rows: list[dict[str, Any]]) -> str:
+    """The margin over the better baseline at every budget, mean [95 % t-interval] over seeds."""
+    budgets = sorted({int(b) for r in rows for b in r["budgets"]})
+    lines = [
+        "| condition | predator | " + " | ".join(f"{b} episodes" for b in budgets) + " |",
+        "|---|---|" + "---:|" * len(budgets),
+    ]
+    for r in rows:
+        cells = [f"{c['mean']:+.3f}{span_text(c['ci'])}" if (c := r["budgets"].get(str(b))) else "–" for b in budgets]
+        lines.append(f"| {r['condition']} | {r['predator']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 #: What counts as a margin that has stopped moving: less than this change over the last 30 %
 #: of training (an equivalence bound for the slope test).
 STEADY_CHANGE = 0.02
@@ -806,11 +843,12 @@ def convergence_markdown(rows: list[dict[str, Any]]) -> str:
 def write(where: Path, out: Path | None = None) -> dict[str, Any]:
     """Collect a sweep's evaluated runs (its folder, or its compact results) and write
     ``report.json`` (every figure at full precision), ``report.md``, ``fig2.png``,
-    ``curves.png``, ``counts.png`` and, with kept checkpoints, ``forest.png`` and ``budget.png``
+    ``curves.png``, ``counts.png`` and, with kept checkpoints, ``forest.png``, ``budget.png`` and
+    ``margins.png``
     into ``out`` (default: ``where``). Returns the summary and the files written; ValueError
     if there is no evaluated run."""
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study.plots import budget_png, counts_png, curves_png, fig2_png, forest_png
+    from pursuit_bench.study.plots import budget_png, counts_png, curves_png, fig2_png, forest_png, margins_png
 
     out = out or where
     results = collect(where)
@@ -834,6 +872,7 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
     learning = curves(results)
     budgets = budget_table(results)
     forest = margins_by_budget(results)
+    margin_budgets = margin_by_budget(results)
     converged = convergence(results)
     prey = prey_table(results)
     prey_budgets = prey_by_budget(results)
@@ -845,6 +884,7 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
         "power": power,
         "budgets": budgets,
         "margins": forest,
+        "margin_by_budget": margin_budgets,
         "convergence": converged,
         "prey": prey,
         "prey_by_budget": prey_budgets,
@@ -892,6 +932,9 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             "## Panels against the training budget",
             "",
             budget_markdown(budgets),
+            "## The margin over the better baseline at each budget (mean [95 % t-interval] over seeds)",
+            "",
+            margin_budget_markdown(margin_budgets),
             "## Convergence: the margin over the better baseline in the last 30 % of training",
             "",
             convergence_markdown(converged),
@@ -922,5 +965,6 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
         written.append("forest.png")
     if len(budgets) > 1:
         atomic_write_bytes(out / "budget.png", budget_png(budgets))
-        written.append("budget.png")
+        atomic_write_bytes(out / "margins.png", margins_png(margin_budgets))
+        written += ["budget.png", "margins.png"]
     return {**totals, "written": written, "budgets": budgets}
