@@ -107,3 +107,31 @@ def test_the_authors_agents_figures_are_the_committed_data() -> None:
     sentence = authors_agents.summary(rows)
     assert sentence.startswith("their greedy prey leaves the arena in 9–26 % of episodes")
     assert sentence in " ".join((ROOT / "REPRODUCTION.md").read_text().split())
+
+
+def test_the_counts_the_prose_quotes_are_the_table_s() -> None:
+    """REPRODUCTION.md's sentences that count panels and conditions, recomputed."""
+    table = report.panel_table(report.collect(RESULTS))
+    report.judge(table)
+    words = " ".join((ROOT / "REPRODUCTION.md").read_text().split())
+    number = {1: "one", 2: "two", 3: "three", 4: "four", 5: "five", 6: "six", 7: "seven", 8: "eight", 10: "ten"}
+    judged = [t for t in table if "verdict" in t]
+    by_condition = report.verdicts_by_condition(table)
+    for verdict, label in (("better", "better"), ("equivalent", "equivalent")):
+        panels = sum(t["verdict"] == verdict for t in judged)
+        conditions = sum(r[verdict] > 0 for r in by_condition)
+        assert f"The {panels} {label} panels come from {conditions} conditions" in words or (
+            f"the {panels} {label} from {conditions}" in words
+        ), verdict
+    unresolved = [t for t in judged if t["verdict"] == "not resolved"]
+    baseline_ahead = sum(
+        max(t["variants"][b]["mean"] for b in report.BASELINES) > t["variants"]["hierarchical"]["mean"]
+        for t in unresolved
+    )
+    assert f"{number[len(unresolved)]} are not resolved, and in {number[baseline_ahead]} of those" in words
+    multi = [r for r in by_condition if r["panels"] > 1]
+    split = sum(sum(r[v] > 0 for v in report.VERDICTS) > 1 for r in multi)
+    assert (
+        f"In {number[split]} of the {number[len(multi)]} multi-predator conditions the predators' verdicts differ"
+        in words
+    )

@@ -59,6 +59,25 @@ def test_every_interval_and_family_the_text_quotes_is_the_tables(committed: dict
         assert committed["families"][name]["counts"]["comparisons"] == int(size), name
 
 
+#: An interval the text quotes and the Holm p it gives for it, in one clause (no other interval
+#: between them).
+QUOTED_P = re.compile(INTERVAL.pattern + r"[^\[\]]{0,90}?Holm p (\d\.\d{3})")
+
+
+def test_each_quoted_holm_p_is_the_one_of_its_own_row(committed: dict[str, Any]) -> None:
+    """A Holm p quoted beside an interval sits in the same table row as that interval (signed
+    as quoted or, for a loss quoted unsigned, negated): a p from another row fails."""
+    text = (ROOT / "docs" / "robustness.md").read_text()
+    prose = " ".join(robustness_study.BLOCK.sub("", text).split())
+    rows = "\n".join(robustness.sections(committed).values()).splitlines()
+    pairs = QUOTED_P.findall(prose)
+    assert len(pairs) > 20
+    for *numbers, p in pairs:
+        m, low, high = (float(x.replace("−", "-")) for x in numbers)
+        shown = {f"{m:+.3f} [{low:+.3f}, {high:+.3f}]", f"{-m:+.3f} [{-high:+.3f}, {-low:+.3f}]"}
+        assert any(any(i in row for i in shown) and p in row for row in rows), (numbers, p)
+
+
 def test_the_families_hold_the_counts_and_intervals_issue_37_found(committed: dict[str, Any]) -> None:
     families = committed["families"]
     assert {k: families["ladder"]["counts"][k] for k in ("comparisons", "uncorrected", "falls", "rises")} == {
