@@ -24,6 +24,7 @@ if TYPE_CHECKING:
         HierarchicalPredator,
         LearningAgent,
         Prey,
+        ResidualPredator,
         ScriptedAgent,
     )
     from pursuit_bench.agents.network import DuelingQNetwork
@@ -42,6 +43,7 @@ __all__ = [
     "LearningAgent",
     "Prey",
     "PrioritizedReplay",
+    "ResidualPredator",
     "ScriptedAgent",
 ]
 
@@ -52,6 +54,7 @@ _LAZY = {
     "HierarchicalPredator": "kinds",
     "LearningAgent": "kinds",
     "Prey": "kinds",
+    "ResidualPredator": "kinds",
     "ScriptedAgent": "kinds",
     "DuelingQNetwork": "network",
     "PrioritizedReplay": "replay",

@@ -21,7 +21,7 @@ import click
 from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS, AgentConfig
 from pursuit_bench.env.conditions import CONDITIONS, MAX_OBSTACLES, OBSTACLE_RADII, OBSTACLE_RADIUS
 
-PREDATOR_KINDS = ("hierarchical", "flat", "always_chase", "always_stalk")
+PREDATOR_KINDS = ("hierarchical", "flat", "residual", "always_chase", "always_stalk")
 #: Training budgets above this (100 times the paper's 1e6 episodes) are surely a typing error.
 MAX_EPISODES = 100_000_000
 RECORD_EVERY = 100

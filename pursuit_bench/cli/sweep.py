@@ -41,7 +41,8 @@ from pursuit_bench.io.signals import SignalCatcher, Stopped
     "--predators",
     default="hierarchical",
     show_default=True,
-    help="Comma-separated predator kinds to train: hierarchical, flat (the ablation), always_chase, always_stalk.",
+    help="Comma-separated predator kinds to train: hierarchical, flat (the ablation), residual (the rule "
+    "corrected), always_chase, always_stalk.",
 )
 @click.option(
     "--eval-episodes",

@@ -146,8 +146,9 @@ def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: fl
     type=click.Choice(PREDATOR_KINDS),
     default="hierarchical",
     show_default=True,
-    help="The predators: the paper's hierarchical agent, the flat ablation (24 actions, no rule), "
-    "or a fixed baseline that does not learn.",
+    help="The predators: the paper's hierarchical agent, the flat ablation (24 actions, no rule), the "
+    "residual predator (mode and a ±60° correction of the rule's direction, 10 actions), or a fixed baseline "
+    "that does not learn.",
 )
 @click.option(
     "--prey",

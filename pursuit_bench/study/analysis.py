@@ -20,7 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench.agents.kinds import HierarchicalPredator
+from pursuit_bench.agents.kinds import HierarchicalPredator, ResidualPredator
+from pursuit_bench.env.task import N_DIRECTIONS
+from pursuit_bench.rules.navigation import navigate
 from pursuit_bench.training.evaluate import Actor, run_episodes
 
 #: Distance bins of P(chase | distance), in arena units (the arena is 2 wide).
@@ -49,6 +51,9 @@ class PredatorStates:
     within an episode)."""
     positions: np.ndarray
     """(N, n_agents, 2) every agent's position in that state."""
+    correction: np.ndarray | None = None
+    """(N,) a residual predator's correction of its rule's direction, in steps of 30° (−6 … +5:
+    the direction it took minus the one the rule gives); None for the hierarchical predator."""
 
 
 def collect(
@@ -67,7 +72,7 @@ def collect(
     steps: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     def on_step(obs: np.ndarray, actions: np.ndarray, done: np.ndarray) -> None:
-        steps.append((obs.copy(), actions[:, :-1, 0].copy(), done.copy()))
+        steps.append((obs.copy(), actions[:, :-1].copy(), done.copy()))
 
     epsilons = {names[-1]: 0.1}
     run_episodes(
@@ -81,7 +86,8 @@ def collect(
         task_options=task_options,
     )
     obs = np.stack([s[0] for s in steps])  # (T, B, n, n_obs)
-    modes = np.stack([s[1] for s in steps])  # (T, B, n_pred)
+    actions = np.stack([s[1] for s in steps])  # (T, B, n_pred, 2)
+    modes = actions[..., 0]  # (T, B, n_pred)
     done = np.stack([s[2] for s in steps])  # (T, B)
     positions = obs[..., 0:2]  # (T, B, n, 2): every agent's own position
     distances = np.linalg.norm(positions[:, :, :-1] - positions[:, :, -1:], axis=-1)  # (T, B, n_pred)
@@ -94,6 +100,11 @@ def collect(
         flat_obs = obs[:, :, i].reshape(-1, obs.shape[-1])
         features, value = agent.value_features(flat_obs)
         started = (modes[1:, :, i] == 1) & (modes[:-1, :, i] == 0) & ~fresh[1:]
+        correction = None
+        if isinstance(agent, ResidualPredator):
+            rule = navigate(flat_obs, modes[:, :, i].reshape(-1), avoidance=agent.avoidance)
+            taken = actions[:, :, i, 1].reshape(-1)
+            correction = (taken - rule + N_DIRECTIONS // 2) % N_DIRECTIONS - N_DIRECTIONS // 2
         out[names[i]] = PredatorStates(
             features=features,
             value=value,
@@ -102,6 +113,7 @@ def collect(
             closest=closest[:, :, i].reshape(-1),
             onsets=distances[1:, :, i][started],
             positions=positions.reshape(-1, *positions.shape[2:]),
+            correction=correction,
         )
     return out
 
@@ -113,6 +125,26 @@ def chase_by_distance(distance: np.ndarray, mode: np.ndarray) -> dict[str, list[
     chases = np.bincount(index, weights=mode, minlength=len(DISTANCE_BINS) - 1)
     probability = [float(c / n) if n else None for c, n in zip(chases, counts, strict=True)]
     return {"bins": DISTANCE_BINS.tolist(), "p_chase": probability, "states": counts.tolist()}
+
+
+def correction_by_distance(distance: np.ndarray, mode: np.ndarray, correction: np.ndarray) -> dict[str, Any]:
+    """A residual predator's corrections per mode and distance bin: the share of states it
+    corrected the rule (k ≠ 0) and the mean correction (steps of 30°), None for an empty bin;
+    and over all its states, how often it used each correction."""
+    index = np.clip(np.digitize(distance, DISTANCE_BINS) - 1, 0, len(DISTANCE_BINS) - 2)
+    by_mode: dict[str, Any] = {}
+    for value, label in ((0, "stalk"), (1, "chase")):
+        chosen = mode == value
+        counts = np.bincount(index[chosen], minlength=len(DISTANCE_BINS) - 1)
+        corrected = np.bincount(index[chosen], weights=correction[chosen] != 0, minlength=len(DISTANCE_BINS) - 1)
+        total = np.bincount(index[chosen], weights=correction[chosen], minlength=len(DISTANCE_BINS) - 1)
+        by_mode[label] = {
+            "corrected": [float(c / n) if n else None for c, n in zip(corrected, counts, strict=True)],
+            "mean_correction": [float(t / n) if n else None for t, n in zip(total, counts, strict=True)],
+            "states": counts.tolist(),
+        }
+    used = {int(k): int(n) for k, n in zip(*np.unique(correction, return_counts=True), strict=True)}
+    return {"bins": DISTANCE_BINS.tolist(), **by_mode, "used": used}
 
 
 def onset_summary(onsets: np.ndarray) -> dict[str, Any]:
@@ -168,6 +200,11 @@ def analyse(states: dict[str, PredatorStates], seed: int) -> tuple[dict[str, Any
             "chase_by_distance": chase_by_distance(s.distance, s.mode),
             "chase_onset_distance": onset_summary(s.onsets),
             "p_chase": float(s.mode.mean()),
+            **(
+                {"correction_by_distance": correction_by_distance(s.distance, s.mode, s.correction)}
+                if s.correction is not None
+                else {}
+            ),
             "distance": np.round(s.distance, 4).tolist(),
             "mode": s.mode.astype(int).tolist(),
         }

@@ -106,7 +106,8 @@ def run_episodes(
         for i, name in enumerate(names):
             actor, eps = actors[name], epsilons.get(name)
             if traces is not None and isinstance(actor, HierarchicalPredator):
-                _, chosen, q_values[:, i], values[:, i] = actor.decide(obs[:, i], explore=eps is not None, epsilon=eps)
+                _, chosen, q, values[:, i] = actor.decide(obs[:, i], explore=eps is not None, epsilon=eps)
+                q_values[:, i] = actor.mode_q(q)
             else:
                 chosen = np.asarray(actor.act_batch(obs[:, i], explore=eps is not None, epsilon=eps))
             put_actions(actions, i, chosen)

@@ -82,7 +82,7 @@ class SweepPlan:
             raise ValueError(f"conditions={list(self.conditions)!r}: expected some of {', '.join(CONDITIONS)}")
         if isinstance(self.seeds, bool) or not isinstance(self.seeds, int) or self.seeds < 1:
             raise ValueError(f"seeds={self.seeds!r}: expected an integer >= 1")
-        kinds = ("hierarchical", "flat", "always_chase", "always_stalk")
+        kinds = ("hierarchical", "flat", "residual", "always_chase", "always_stalk")
         if not self.predators or any(p not in kinds for p in self.predators):
             raise ValueError(f"predators={list(self.predators)!r}: expected some of {', '.join(kinds)}")
         TaskConfig(obstacles=self.obstacles, obstacle_radius=self.obstacle_radius)  # refuses bad obstacle options

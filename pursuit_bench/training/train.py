@@ -28,7 +28,14 @@ import torch
 
 from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
 from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.agents.kinds import KINDS, HierarchicalPredator, LearningAgent, ScriptedAgent, members_to_env
+from pursuit_bench.agents.kinds import (
+    KINDS,
+    HierarchicalPredator,
+    LearningAgent,
+    ResidualPredator,
+    ScriptedAgent,
+    members_to_env,
+)
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
@@ -109,10 +116,13 @@ def build_agents(
         learner = DQNLearner(
             key[1], kinds[key].n_actions, configs[members[0][0]].agent, members=len(members), seed=seeds
         )
+        kind = kinds[key]
+        if issubclass(kind, ResidualPredator):
+            kind.prepare(learner)  # starts as the rule
         made = [
-            HierarchicalPredator(name, learner, m, avoidance=configs[r].avoids)
-            if kinds[key] is HierarchicalPredator
-            else kinds[key](name, learner, m)
+            kind(name, learner, m, avoidance=configs[r].avoids)
+            if issubclass(kind, HierarchicalPredator)
+            else kind(name, learner, m)
             for m, (r, _, name) in enumerate(members)
         ]
         groups.append(Group(learner, made, [i for _, i, _ in members], [r for r, _, _ in members]))
@@ -396,8 +406,8 @@ class Trainer:
             env_actions = members_to_env(group.agents, chosen, obs)
             for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):
                 put_actions(actions[r], i, env_actions[m])
-                if agent.kind == "hierarchical":
-                    self.runs[r].q_values[:, i], self.runs[r].values[:, i] = q[m], v[m]
+                if isinstance(agent, HierarchicalPredator):
+                    self.runs[r].q_values[:, i], self.runs[r].values[:, i] = agent.mode_q(q[m]), v[m]
         for r in active:
             run = self.runs[r]
             for i, name in enumerate(run.names):

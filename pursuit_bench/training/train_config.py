@@ -12,7 +12,7 @@ from typing import Any, Literal
 from pursuit_bench.agents.config import QUICK, AgentConfig
 from pursuit_bench.env.conditions import CONDITIONS, OBSTACLE_RADIUS, Backend, TaskConfig
 
-PredatorKind = Literal["hierarchical", "flat", "always_chase", "always_stalk"]
+PredatorKind = Literal["hierarchical", "flat", "residual", "always_chase", "always_stalk"]
 PreyKind = Literal["learning", "scripted"]
 
 
@@ -32,8 +32,9 @@ class TrainConfig:
     """Seeds the arenas, and with each agent's index its network's initialisation, its
     exploration and its replay sampling."""
     predator: PredatorKind = "hierarchical"
-    """What the predators are: the paper's hierarchical agent, the flat ablation, or a scripted
-    baseline (which does not learn)."""
+    """What the predators are: the paper's hierarchical agent, the flat ablation, the residual
+    predator (the rule's direction corrected by up to ±60°, learned), or a scripted baseline
+    (which does not learn)."""
     prey: PreyKind = "learning"
     """A learning prey (the paper) or the scripted fleeing prey."""
     batched_learners: bool = True
@@ -58,9 +59,10 @@ class TrainConfig:
                 raise ValueError(f"{name}={value!r}: expected an integer >= 1")
         if self.agent.episodes != self.episodes:  # one training length in config.json, the run's
             object.__setattr__(self, "agent", self.agent.replace(episodes=self.episodes))
-        if self.predator not in ("hierarchical", "flat", "always_chase", "always_stalk"):
+        if self.predator not in ("hierarchical", "flat", "residual", "always_chase", "always_stalk"):
             raise ValueError(
-                f"predator={self.predator!r}: expected 'hierarchical', 'flat', 'always_chase' or 'always_stalk'"
+                f"predator={self.predator!r}: expected 'hierarchical', 'flat', 'residual', 'always_chase' or "
+                "'always_stalk'"
             )
         if self.prey not in ("learning", "scripted"):
             raise ValueError(f"prey={self.prey!r}: expected 'learning' or 'scripted'")
