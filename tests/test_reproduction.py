@@ -135,3 +135,46 @@ def test_the_counts_the_prose_quotes_are_the_table_s() -> None:
         f"In {number[split]} of the {number[len(multi)]} multi-predator conditions the predators' verdicts differ"
         in words
     )
+
+
+def test_fig3_s_figures_are_the_committed_analyses() -> None:
+    """REPRODUCTION.md's Fig. 3 paragraph: the k-NN R² of the shipped agents' value-stream
+    embeddings, from results/analysis/ (scripts/export_analysis.py)."""
+    words = " ".join((ROOT / "REPRODUCTION.md").read_text().split())
+
+    def scores(condition: str) -> dict[str, list[str]]:
+        analysis = json.loads((ROOT / "results" / "analysis" / f"fig3-{condition}.json").read_text())
+        predators = analysis["predators"].values()
+        return {q: [f"{p['organisation'][q]:.2f}" for p in predators] for q in ("value", "distance")}
+
+    low, high = scores("2p-low-individual"), scores("2p-high-individual")
+    assert f"organised by V(s) (k-NN R² {low['value'][0]} and {low['value'][1]})" in words
+    assert f"distance to the prey ({low['distance'][0]} and {low['distance'][1]})" in words
+    assert (
+        f"(V {high['value'][0]} / {high['value'][1]}, distance {high['distance'][0]} / {high['distance'][1]})" in words
+    )
+
+
+def test_the_chase_analysis_figures_are_the_committed_ones() -> None:
+    """REPRODUCTION.md's P(chase | distance) and chase-onset sentences, from
+    results/analysis/repro-analysis.json."""
+    analysis = json.loads((ROOT / "results" / "analysis" / "repro-analysis.json").read_text())
+    words = " ".join((ROOT / "REPRODUCTION.md").read_text().split())
+    low = [v for k, v in analysis.items() if k.endswith("low cost")]
+    high = [v for k, v in analysis.items() if k.endswith("high cost")]
+    assert sum(v["runs"] for v in low + high) == 100
+    near = [p for v in low for p in v["p_chase"][1:3]]  # bins 0.1-0.2 and 0.2-0.3
+    assert f"P(chase) {min(near):.2f}–{max(near):.2f} within 0.1–0.3" in words
+    mid = [v["p_chase"][6] for v in low]  # 0.6-0.7
+    assert f"still {min(mid):.2f}–{max(mid):.2f} of the time at 0.6–0.7" in words
+    beyond = max(p for v in high for p in v["p_chase"][2:] if p is not None)
+    assert f"P(chase) at most {beyond:.2f} beyond 0.2" in words
+    close = [v["p_chase"][1] for v in high]
+    assert f"({min(close):.2f}–{max(close):.2f} within 0.1–0.2)" in words
+    onsets = {k: f"{v['chase_onset_median']:.2f}" for k, v in analysis.items()}
+    order = ("1 predator", "2 predators", "3 predators")
+    assert f"**{' / '.join(onsets[f'{n}, high cost'] for n in order)}**" in words
+    assert f"**{' / '.join(onsets[f'{n}, low cost'] for n in order)}** under low cost" in words
+    for n in order:  # the intervals apart
+        h, lo = analysis[f"{n}, high cost"]["chase_onset_ci"], analysis[f"{n}, low cost"]["chase_onset_ci"]
+        assert h[1] < lo[0]
