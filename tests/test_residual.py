@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_helpers import run_cli
 
 from pursuit_bench.agents import QUICK, DQNLearner, HierarchicalPredator, ResidualPredator
 from pursuit_bench.agents.kinds import CORRECTION_TIE_BREAK, CORRECTIONS
@@ -13,7 +14,6 @@ from pursuit_bench.env import task
 from pursuit_bench.env.vector import VectorPursuitEnv
 from pursuit_bench.rules.navigation import navigate
 from pursuit_bench.training.train import TrainConfig, build_agents
-from tests.cli_helpers import run_cli
 
 pytestmark = pytest.mark.usefixtures("one_thread")
 
