@@ -271,12 +271,16 @@ def strict_counts(table: list[dict[str, Any]]) -> dict[str, Any]:
     judged = [t for t in table if "paired" in t]
     if not judged:
         return {"seeds": [], "counts": []}
-    seeds = judged[0]["variants"]["hierarchical"]["seeds"]
+    # the seeds every judged panel has (a sweep still running may have more seeds of one condition)
+    seeds = sorted(set.intersection(*(set(t["variants"]["hierarchical"]["seeds"]) for t in judged)))
+    if not seeds:
+        return {"seeds": [], "counts": []}
     counts = []
-    for i, _ in enumerate(seeds):
+    for seed in seeds:
         wins = 0
         for t in judged:
             v = t["variants"]
+            i = v["hierarchical"]["seeds"].index(seed)
             ours = v["hierarchical"]["values"][i]
             wins += all(ours > v[b]["values"][i] for b in BASELINES)
         counts.append(wins)
@@ -935,7 +939,8 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             "## The margin over the better baseline at each budget (mean [95 % t-interval] over seeds)",
             "",
             margin_budget_markdown(margin_budgets),
-            "## Convergence: the margin over the better baseline in the last 30 % of training",
+            "## Convergence: the margin over the better baseline at the last budgets (the last 30 % of training, at "
+            "least three)",
             "",
             convergence_markdown(converged),
             "## The learned prey (hierarchical runs, final budget)",
