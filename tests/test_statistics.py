@@ -210,3 +210,36 @@ def test_statistics_md_prints_what_its_script_gives() -> None:
         f"normal data give {normal}, the lognormal with σ = 0.25 of the test {mild} and the one with σ = 0.5 {strong}"
         in words
     )
+
+
+def test_the_strict_count_uses_the_seeds_every_panel_has() -> None:
+    """A sweep under way may have evaluated more seeds of one condition than of another: the
+    count per seed is over the seeds all panels share, each panel's values read by seed."""
+
+    def variant(values: list[float], seeds: list[int]) -> dict:
+        return {"mean": float(np.mean(values)), "ci": None, "seeds": seeds, "values": values, "runs": []}
+
+    table = [
+        {
+            "condition": "1p-low",
+            "predator": "predator_0",
+            "variants": {
+                "hierarchical": variant([0.5, 0.1, 0.9], [0, 1, 2]),
+                "always_chase": variant([0.4, 0.2, 0.0], [0, 1, 2]),
+                "always_stalk": variant([0.0, 0.0, 0.0], [0, 1, 2]),
+            },
+            "paired": {},
+        },
+        {
+            "condition": "1p-high",
+            "predator": "predator_0",
+            "variants": {
+                "hierarchical": variant([0.3, 0.3], [1, 2]),
+                "always_chase": variant([0.1, 0.4], [1, 2]),
+                "always_stalk": variant([0.2, 0.2], [1, 2]),
+            },
+            "paired": {},
+        },
+    ]
+    counts = report.strict_counts(table)
+    assert counts["seeds"] == [1, 2] and counts["counts"] == [1, 1]  # seed 1: 1p-high wins; seed 2: 1p-low wins
