@@ -220,11 +220,9 @@ def verdict(difference: dict[str, Any], equivalent: dict[str, Any], alpha: float
     Holm-adjusted two-sided ``p_holm``) and its equivalence test (:func:`statistics.equivalence`
     with ``p_holm``): a significant difference first (two-sided at ``2 alpha``, ``alpha`` a
     direction), then equivalence within the margin, else not resolved."""
-    if difference["p_holm"] <= 2 * alpha:
-        return "rule helps" if difference["mean"] > 0 else "flat better"
-    if equivalent["p_holm"] <= alpha:
-        return "equivalent"
-    return "not resolved"
+    return statistics.difference_verdict(
+        difference["mean"], difference["p_holm"], equivalent["p_holm"], ("flat better", "rule helps"), alpha
+    )
 
 
 def compare(

@@ -432,28 +432,31 @@ def margins_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
     return list(rows.values())
 
 
+def seed_margins(entry: dict[str, Any]) -> np.ndarray:
+    """A panel's margin over its better baseline, seed by seed: the trained predator's return
+    minus the higher of the two baselines' on that seed's evaluation."""
+    v = entry["variants"]
+    return np.array(v["hierarchical"]["values"]) - np.maximum(*(np.array(v[b]["values"]) for b in BASELINES))
+
+
 def margin_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
     """Per panel, its margin over the better baseline at every budget: per seed the trained
     predator's return minus the higher of the two baselines' on that seed's evaluation, the mean
     over seeds and its 95 % t-interval (the figure of margins against budget)."""
-    budgets = by_budget(results)
-    tables = {e: panel_table(runs) for e, runs in budgets.items()}
-    rows: list[dict[str, Any]] = []
-    for episodes, table in tables.items():
-        for t in (t for t in table if "paired" in t):
-            v = t["variants"]
-            margins = np.array(v["hierarchical"]["values"]) - np.maximum(*(np.array(v[b]["values"]) for b in BASELINES))
-            row = next((r for r in rows if (r["condition"], r["predator"]) == (t["condition"], t["predator"])), None)
-            if row is None:
-                row = {"condition": t["condition"], "predator": t["predator"], "budgets": {}}
-                rows.append(row)
+    rows: dict[tuple[str, str], dict[str, Any]] = {}
+    for episodes, evaluated in by_budget(results).items():
+        for t in (t for t in panel_table(evaluated) if "paired" in t):
+            margins = seed_margins(t)
+            row = rows.setdefault(
+                (t["condition"], t["predator"]), {"condition": t["condition"], "predator": t["predator"], "budgets": {}}
+            )
             row["budgets"][str(episodes)] = {
                 "seeds": len(margins),
                 "mean": float(margins.mean()),
                 "ci": statistics.t_interval(margins),
                 "values": margins.tolist(),
             }
-    return rows
+    return list(rows.values())
 
 
 def margin_budget_markdown(rows: list[dict[str, Any]]) -> str:
@@ -499,13 +502,7 @@ def convergence(results: list[RunResult]) -> list[dict[str, Any]]:
     for i, t in enumerate(tables[final]):
         if "paired" not in t:
             continue
-        margins = []
-        for e in window:
-            v = tables[e][i]["variants"]
-            margins.append(
-                np.array(v["hierarchical"]["values"]) - np.maximum(*(np.array(v[b]["values"]) for b in BASELINES))
-            )
-        curves = np.array(margins).T  # (seeds, budgets)
+        curves = np.array([seed_margins(tables[e][i]) for e in window]).T  # (seeds, budgets)
         test = statistics.slope_test(list(curves), np.array(window) / 1000, STEADY_CHANGE / span)
         rows.append(
             {

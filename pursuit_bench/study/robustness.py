@@ -341,12 +341,8 @@ def correct(rows: list[dict[str, Any]], words: tuple[str, str], alpha: float = s
     for row, adjusted in zip(tested, statistics.holm([r["equivalence"]["p"] for r in tested]), strict=True):
         row["equivalence"]["p_holm"] = float(adjusted)
     for row in rows:
-        if row["p_holm"] <= 2 * alpha:
-            row["verdict"] = words[0] if row["mean"] < 0 else words[1]
-        elif "equivalence" in row and row["equivalence"]["p_holm"] <= alpha:
-            row["verdict"] = "equivalent"
-        else:
-            row["verdict"] = "not resolved"
+        equivalent = row["equivalence"]["p_holm"] if "equivalence" in row else None
+        row["verdict"] = statistics.difference_verdict(row["mean"], row["p_holm"], equivalent, words, alpha)
     counts = {v: sum(r["verdict"] == v for r in rows) for v in (*words, "equivalent", "not resolved")}
     return {"comparisons": len(rows), "uncorrected": sum(r["p"] < 2 * alpha for r in rows), **counts}
 

@@ -123,6 +123,17 @@ def welch_difference(
     return {"mean": mean, "ci": [mean - half, mean + half], "p": p, "df": df}
 
 
+def _tost_p(mean: float, se: float, df: float, margin: float) -> float:
+    """The larger of the two one-sided t-test p-values that a difference of ``mean`` (standard
+    error ``se``, ``df`` degrees of freedom) lies above ``-margin`` and below ``+margin``; with no
+    spread, 0 inside the margin and 1 outside."""
+    if se == 0:
+        return 0.0 if abs(mean) < margin else 1.0
+    above = float(stats.t.sf((mean + margin) / se, df))  # H0: difference <= -margin
+    below = float(stats.t.cdf((mean - margin) / se, df))  # H0: difference >= +margin
+    return max(above, below)
+
+
 def equivalence(
     ours: Sequence[float] | np.ndarray, theirs: Sequence[float] | np.ndarray, margin: float, alpha: float = ALPHA
 ) -> dict[str, Any]:
@@ -137,12 +148,7 @@ def equivalence(
     welch = welch_difference(a, b, confidence=1 - 2 * alpha)
     mean, (low, high) = welch["mean"], welch["ci"]
     se = float(np.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b)))
-    if se == 0:
-        p = 0.0 if abs(mean) < margin else 1.0
-    else:
-        above = float(stats.t.sf((mean + margin) / se, welch["df"]))  # H0: difference <= -margin
-        below = float(stats.t.cdf((mean - margin) / se, welch["df"]))  # H0: difference >= +margin
-        p = max(above, below)
+    p = _tost_p(mean, se, welch["df"], margin)
     return {"margin": margin, "p": p, "bound": max(abs(low), abs(high))}
 
 
@@ -172,16 +178,24 @@ def paired_equivalence(differences: Sequence[float] | np.ndarray, margin: float)
     d = np.asarray(differences, dtype=float)
     if d.ndim != 1 or len(d) < 2:
         raise ValueError(f"paired equivalence needs two or more seed-level differences, got shape {d.shape}")
-    mean, sd, n = float(d.mean()), float(d.std(ddof=1)), len(d)
-    if sd == 0:
-        p = 0.0 if abs(mean) < margin else 1.0
-    else:
-        se = sd / np.sqrt(n)
-        above = float(stats.t.sf((mean + margin) / se, n - 1))  # H0: difference <= -margin
-        below = float(stats.t.cdf((mean - margin) / se, n - 1))  # H0: difference >= +margin
-        p = max(above, below)
+    mean, n = float(d.mean()), len(d)
+    p = _tost_p(mean, float(d.std(ddof=1)) / np.sqrt(n), n - 1, margin)
     low, high = t_interval(d, 1 - 2 * ALPHA) or [mean, mean]
     return {"margin": margin, "p": p, "bound": max(abs(low), abs(high))}
+
+
+def difference_verdict(
+    mean: float, p_holm: float, equivalent_p_holm: float | None, words: tuple[str, str], alpha: float = ALPHA
+) -> str:
+    """The verdict of one comparison of a family, from its Holm-adjusted two-sided ``p_holm`` and,
+    where it has one, its equivalence test's: ``words[0]`` or ``words[1]`` (the difference below or
+    above zero) when ``p_holm`` is at most ``2 alpha`` (``alpha`` a direction), else ``equivalent``
+    when the equivalence p is at most ``alpha``, else ``not resolved``."""
+    if p_holm <= 2 * alpha:
+        return words[0] if mean < 0 else words[1]
+    if equivalent_p_holm is not None and equivalent_p_holm <= alpha:
+        return "equivalent"
+    return "not resolved"
 
 
 #: A panel's four verdicts (:func:`classify`), in the order the reports print them.
