@@ -26,6 +26,13 @@ from typing import TYPE_CHECKING, Any
 # the same on every x86 CPU since 2013, unless the user set it. MKL reads this when first used:
 # before torch is.
 os.environ.setdefault("MKL_CBWR", "AVX2")
+# OpenBLAS (numpy's and SciPy's, whose products the compiled update calls: agents/fused.py) also
+# picks its kernels by CPU, and training's bytes follow its pick: on a CPU with AVX-512 it took its
+# SkylakeX kernels and the README's main job trained to other figures. Pinned to its Haswell
+# kernels (AVX2, every x86 CPU since 2013) unless the user set it; OpenBLAS reads this when its
+# library loads, so before numpy is imported (docs/departures.md, "Reproducibility across machines").
+# Worker processes (sweeps, Ray) inherit the setting from this process's environment.
+os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 
 import gymnasium
 

@@ -224,3 +224,25 @@ def test_importing_the_package_pins_mkls_code_path_unless_set() -> None:
     assert done.returncode == 0 and done.stdout.split() == ["AVX2"], done.stderr
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env={**env, "MKL_CBWR": "AUTO"})
     assert done.returncode == 0 and done.stdout.split() == ["AUTO"], done.stderr
+
+
+@pytest.mark.slow
+def test_importing_the_package_pins_openblas_kernels_unless_set() -> None:
+    # Every OpenBLAS the training loads (numpy's, and SciPy's that the compiled update calls) must run its
+    # Haswell kernels whatever the CPU: without the pin, OpenBLAS picks by CPU (SkylakeX, Zen, …) and
+    # training's bytes follow. threadpoolctl reads each loaded OpenBLAS's own report of its kernels.
+    code = (
+        "import os, pursuit_bench, numpy, scipy.linalg\n"
+        "from pursuit_bench.agents import fused\n"
+        "from threadpoolctl import threadpool_info\n"
+        "kinds = sorted({i['architecture'] for i in threadpool_info() if i['internal_api'] == 'openblas'})\n"
+        "print(os.environ['OPENBLAS_CORETYPE'], *kinds)"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["Haswell", "Haswell"], done.stdout
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env={**env, "OPENBLAS_CORETYPE": "Sandybridge"}
+    )
+    assert done.returncode == 0 and done.stdout.split() == ["Sandybridge", "Sandybridge"], done.stdout + done.stderr
