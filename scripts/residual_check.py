@@ -46,7 +46,7 @@ def check(run: Path, seed: int) -> dict[str, object]:
         "states": sum(used.values()),
         "corrected_share": 1 - used.get(0, 0) / sum(used.values()),
         "used": used,
-        "corrected_transitions": int(learner.correction_replay.size[0]),
+        "corrected_transitions": int(learner.correction_replay.size[0]),  # the replay holds them all
         "correction_updates": int(learner.correction_adam.steps[0]),
         "transitions": int(learner.steps),
     }

@@ -110,13 +110,13 @@ def test_transitions_that_never_take_a_correction_leave_the_rule_greedy() -> Non
     start = [p.detach().clone() for p in residual.corrections.parameters()]
     modes_before, _ = hierarchical.evaluate(observations(500, 2)[None, :, 0].repeat(3, axis=0))
     rng = np.random.default_rng(0)
-    while residual.steps < REPRODUCTION.learning_starts:
+    while residual.updates < 1000:  # as training drives them: store, then the updates owed
         transitions = stacked_transitions(rng, 3, 64, n_obs)
         residual.store(*transitions)
         hierarchical.store(transitions[0], transitions[1] // 5, *transitions[2:])
-    for _ in range(1000):
-        residual.update()
-        hierarchical.update()
+        residual.train()
+        hierarchical.train()
+    assert residual.updates == hierarchical.updates == 1000
     for before, after in zip(start, residual.corrections.parameters(), strict=True):
         assert torch.equal(before, after)
     assert (residual.correction_adam.steps == 0).all() and (residual.correction_replay.size == 0).all()
@@ -136,7 +136,7 @@ def test_a_correction_that_earns_more_becomes_greedy_where_it_does_and_nowhere_e
     first region, the rule in the second, and no other correction anywhere; the mode's value did
     not learn from the corrected transitions."""
     n_obs = 10
-    config = QUICK.replace(learning_starts=1, batch_size=32, learning_rate=1e-3)
+    config = QUICK.replace(learning_starts=1, batch_size=32, learning_rate=1e-3, replay_ratio=1 / 32)
     learner = ResidualLearner(n_obs, config, members=2, seed=[3, 4])
     rng = np.random.default_rng(1)
     good = int(ResidualPredator.action(1, 1))
@@ -148,10 +148,11 @@ def test_a_correction_that_earns_more_becomes_greedy_where_it_does_and_nowhere_e
 
     for _ in range(250):
         obs = np.concatenate([region(1.0, 32), region(-1.0, 32)], axis=1)
-        actions = np.where(rng.random((2, 64)) < 0.3, good, int(ResidualPredator.action(1, 0)))
+        actions = np.where(rng.random((2, 64)) < 0.5, good, int(ResidualPredator.action(1, 0)))
         rewards = np.where(actions == good, np.where(obs[..., 0] > 0, 0.5, -0.5), 0.0).astype(np.float32)
         learner.store(obs, actions, rewards, obs, np.ones((2, 64), dtype=np.float32))
-        learner.update()
+        learner.train()
+    assert (learner.correction_adam.steps > 200).all()
     above, below = region(1.0, 1000), region(-1.0, 1000)
     for name, corrections in greedy_corrections(learner, above).items():
         assert (corrections == 1).mean() > 0.9, name
@@ -182,12 +183,13 @@ def test_the_mode_explores_as_the_hierarchical_predator_and_the_correction_rarel
 
 def test_a_stack_splits_and_a_member_saves_and_loads_with_its_corrections() -> None:
     n_obs = 10
-    config = QUICK.replace(learning_starts=1, batch_size=16)
+    config = QUICK.replace(learning_starts=1, batch_size=16, replay_ratio=1 / 16)
     learner = ResidualLearner(n_obs, config, members=3, seed=[7, 8, 9])
     rng = np.random.default_rng(2)
     for _ in range(40):
         learner.store(*stacked_transitions(rng, 3, 32, n_obs, corrected=0.5))
-        learner.update()
+        learner.train()
+    assert (learner.correction_adam.steps > 0).all()
     obs = rng.normal(size=(3, 50, n_obs)).astype(np.float32)
     q, _ = learner.evaluate(obs)
     alone = learner.take([2])
@@ -202,8 +204,8 @@ def test_a_stack_splits_and_a_member_saves_and_loads_with_its_corrections() -> N
     batch = stacked_transitions(np.random.default_rng(9), 1, 32, n_obs, corrected=0.5)
     learner.store(*(np.repeat(a, 3, axis=0) for a in batch))
     copy.store(*batch)
-    learner.update()
-    copy.update()
+    learner.train()
+    copy.train()
     np.testing.assert_allclose(copy.evaluate(obs[1:2])[0][0], learner.evaluate(obs)[0][1], atol=1e-6)
     with pytest.raises(ValueError, match="no corrections"):
         copy.load_member_state(0, DQNLearner(n_obs, 2, config).member_state(0))

@@ -14,10 +14,10 @@ The predator's value of mode m with a correction of k steps of 30° is
   corrections of each mode only, its last layer zero at the start) with its own Adam and its own
   replay of the corrected transitions alone: only they move it. It learns the one-step advantage
   of turning k · 30° and then going on as the mode learner's policy does,
-  ``y = r + γ (1 − terminated) Q̄_mode(s', argmax Q_mode(s', ·)) − Q̄_mode(s, m)`` (Q̄: the mode
-  learner's target network), so that the mode's value and the correction's share one
-  continuation and the greedy correction is one step of policy improvement on the hierarchical
-  predator.
+  ``y = r + γ (1 − terminated) Q̄_mode(s', argmax Q_mode(s', ·)) − Q_mode(s, m)`` (Q̄: the mode
+  learner's target network): the target the mode learner fits on the rule's transitions, less
+  its fit. The mode's value and the correction's share one continuation, and the greedy
+  correction is one step of policy improvement on the hierarchical predator.
 - ``c`` (:data:`CORRECTION_PRIOR`) is a fixed part of C, not a starting value: a correction is
   greedy where its learned advantage exceeds c per 30° turned.
 
@@ -34,6 +34,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+import numba
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -42,7 +43,7 @@ from torch import nn
 from pursuit_bench.agents.adam import _adam_step
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.dqn import DECISIVE_GAP, DQNLearner, decision_scale
-from pursuit_bench.agents.fused import q_and_value_kernel
+from pursuit_bench.agents.fused import _dense_relu, _inputs, q_and_value_kernel
 from pursuit_bench.agents.kinds import HierarchicalPredator
 from pursuit_bench.agents.network import TRUNK, StackedLinear, member_seeds
 from pursuit_bench.env.task import N_DIRECTIONS
@@ -78,6 +79,21 @@ class CorrectionNetwork(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.out(torch.relu(self.hidden2(torch.relu(self.hidden1(x)))))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _corrections_kernel(w1, b1, w2, b2, w3, b3, obs, wall):
+    """Â (M, B, 8) of every member for observations (M, B, n_obs): :class:`CorrectionNetwork`'s
+    forward pass, compiled (torch's to float rounding)."""
+    members, rows, _ = obs.shape
+    out = np.empty((members, rows, w3.shape[2]), dtype=np.float32)
+    for m in range(members):
+        hidden = _dense_relu(_dense_relu(_inputs(obs[m], wall), w1[m], b1[m, 0]), w2[m], b2[m, 0])
+        out[m] = np.dot(hidden, w3[m])
+        for i in range(rows):
+            for j in range(w3.shape[2]):
+                out[m, i, j] += b3[m, 0, j]
+    return out
 
 
 class MemberAdam:
@@ -188,19 +204,26 @@ class ResidualLearner(DQNLearner):
         self.correction_adam = MemberAdam(list(self.corrections.parameters()), lr=config.learning_rate)
         self.correction_replay = CorrectionReplay(members, config.buffer_size, n_obs)
         self.correction_rngs = [np.random.default_rng([int(s), 2]) for s in streams]
+        self.owed_corrections = np.zeros(members)  # updates of the corrections owed, per member
 
     # --- values -------------------------------------------------------------------------------
 
-    def correction_values(self, obs: np.ndarray) -> np.ndarray:
-        """C (M, B, 2, 5) for observations (M, B, n_obs): 0 for k = 0, Â − c·|k| otherwise."""
-        with torch.no_grad():
-            learned = self.corrections(self.encode(obs)).numpy()
+    def correction_values(self, obs: np.ndarray, *, compiled: bool = False) -> np.ndarray:
+        """C (M, B, 2, 5) for observations (M, B, n_obs): 0 for k = 0, Â − c·|k| otherwise; Â by
+        torch's forward pass, or by the compiled one (``compiled``: what the training loop acts with)."""
+        if compiled:
+            w1, b1, w2, b2, w3, b3 = (p.detach().numpy() for p in self.corrections.parameters())
+            obs = np.ascontiguousarray(obs, dtype=np.float32)
+            learned = _corrections_kernel(w1, b1, w2, b2, w3, b3, obs, self.config.wall_features)
+        else:
+            with torch.no_grad():
+                learned = self.corrections(self.encode(obs)).numpy()
         table = np.zeros((*learned.shape[:-1], 2, _PER_MODE), dtype=np.float32)
         table[..., 1:] = learned.reshape(*learned.shape[:-1], 2, _PER_MODE - 1)
         return table - np.float32(self.prior) * _STEPS
 
-    def _with_corrections(self, mode_q: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        q = mode_q[..., :, None] + self.correction_values(obs)
+    def _with_corrections(self, mode_q: np.ndarray, obs: np.ndarray, *, compiled: bool = False) -> np.ndarray:
+        q = mode_q[..., :, None] + self.correction_values(obs, compiled=compiled)
         return q.reshape(*mode_q.shape[:-1], 2 * _PER_MODE)
 
     def evaluate(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -209,9 +232,9 @@ class ResidualLearner(DQNLearner):
         return self._with_corrections(mode_q, np.asarray(obs)), value
 
     def act_values(self, obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`evaluate` with the mode values from the compiled forward pass."""
+        """:meth:`evaluate` by the compiled forward passes (torch's to float rounding)."""
         mode_q, value = super().act_values(obs)
-        return self._with_corrections(mode_q, np.asarray(obs)), value
+        return self._with_corrections(mode_q, np.asarray(obs), compiled=True), value
 
     def decisive_q(self, obs: np.ndarray, member: int) -> np.ndarray:
         """Member ``member``'s Q-values (B, 10), the mode values from the compiled pass, and
@@ -264,19 +287,28 @@ class ResidualLearner(DQNLearner):
     ) -> None:
         """Every transition into the mode learner's replay (actions ``5 · mode + j``: its update
         reads the mode and leaves the corrected ones out); the corrected ones into each member's
-        correction replay too."""
+        correction replay too, each owing the replay ratio's updates of the corrections once that
+        replay holds a batch."""
         super().store(obs, actions, rewards, next_obs, terminated)
         corrected = np.asarray(actions) % _PER_MODE != 0
+        replay = self.correction_replay
         for m in np.flatnonzero(corrected.any(axis=1)):
             rows = corrected[m]
-            self.correction_replay.add(
+            replay.add(
                 int(m), (obs[m, rows], actions[m, rows], rewards[m, rows], next_obs[m, rows], terminated[m, rows])
             )
+            if replay.size[m] >= self.config.batch_size:
+                self.owed_corrections[m] += rows.sum() * self.config.replay_ratio
+
+    def train(self) -> np.ndarray | None:
+        """The mode learner's updates owed (:meth:`DQNLearner.train`), then the corrections'."""
+        losses = super().train()
+        self.learn_corrections()
+        return losses
 
     def update(self) -> np.ndarray:
         """One step of the mode learner on its prioritized batch (the corrected transitions in
-        it weighted 0, their priorities set to ε), then one of the corrections; the mode
-        learner's losses (M,)."""
+        it weighted 0, their priorities set to ε); its losses (M,)."""
         batch = self.replay.sample(self.config.batch_size, self.beta, self.rngs)
         modes, j = np.divmod(batch.actions, _PER_MODE)
         corrected = j != 0
@@ -286,32 +318,40 @@ class ResidualLearner(DQNLearner):
             rows = np.arange(self.members)[:, None]
             td = self.replay.priorities[rows, batch.indices] - self.replay.priority_epsilon
             self.replay.update_priorities(batch.indices, np.where(corrected, 0.0, td))
-        self.learn_corrections()
         return losses
 
     def correction_targets(
         self, obs: np.ndarray, modes: np.ndarray, rewards: np.ndarray, next_obs: np.ndarray, terminated: np.ndarray
     ) -> np.ndarray:
         """The one-step advantages (M, B) Â learns from: ``r + γ (1 − terminated) Q̄(s', argmax
-        Q(s', ·)) − Q̄(s, m)`` with the mode learner's online (Q) and target (Q̄) networks."""
-        wall, offsets = self.config.wall_features, self._offsets
-        target_flat = self._target_flat.numpy()
-        online_next = q_and_value_kernel(self.optimizer.flat.numpy(), offsets, 2, next_obs, wall)[0]
-        target_next = q_and_value_kernel(target_flat, offsets, 2, next_obs, wall)[0]
-        target_now = q_and_value_kernel(target_flat, offsets, 2, obs, wall)[0]
+        Q(s', ·)) − Q(s, m)`` with the mode learner's online (Q) and target (Q̄) networks: the
+        double-DQN target the mode learner fits with its online network on the rule's transitions,
+        less that fit, so that the mode learner's own lag (its target network's drift) cancels."""
+        wall, offsets, online_flat = self.config.wall_features, self._offsets, self.optimizer.flat.numpy()
+        online_next = q_and_value_kernel(online_flat, offsets, 2, next_obs, wall)[0]
+        target_next = q_and_value_kernel(self._target_flat.numpy(), offsets, 2, next_obs, wall)[0]
+        online_now = q_and_value_kernel(online_flat, offsets, 2, obs, wall)[0]
         best = online_next.argmax(axis=-1)[..., None]
         bootstrap = np.take_along_axis(target_next, best, axis=-1)[..., 0]
-        now = np.take_along_axis(target_now, modes[..., None], axis=-1)[..., 0]
+        now = np.take_along_axis(online_now, modes[..., None], axis=-1)[..., 0]
         return rewards + np.float32(self.config.gamma) * (1.0 - terminated) * bootstrap - now
 
-    def learn_corrections(self) -> np.ndarray:
-        """One step of Â for every member whose correction replay holds a batch (others don't
-        move, not even by Adam's momentum), on a uniform batch of its corrected transitions;
-        the members' losses (M,), 0 for those that did not learn."""
+    def learn_corrections(self) -> None:
+        """The corrections' updates owed, member by member: the replay ratio's updates per
+        corrected transition (as the mode learner's per transition), once its correction replay
+        holds a batch."""
+        while True:
+            active = self.owed_corrections >= 1.0
+            if not active.any():
+                return
+            self.owed_corrections[active] -= 1.0
+            self.correction_step(active)
+
+    def correction_step(self, active: np.ndarray) -> np.ndarray:
+        """One step of Â for the ``active`` members (the others don't move, not even by Adam's
+        momentum), each on a uniform batch of its corrected transitions; the members' losses
+        (M,), 0 for those that did not learn."""
         replay, size = self.correction_replay, self.config.batch_size
-        active = replay.size >= size
-        if not active.any():
-            return np.zeros(self.members, dtype=np.float32)
         indices = np.zeros((self.members, size), dtype=np.int64)
         for m in np.flatnonzero(active):
             indices[m] = self.correction_rngs[m].integers(0, replay.size[m], size=size)
@@ -353,6 +393,7 @@ class ResidualLearner(DQNLearner):
         new.correction_adam.steps = self.correction_adam.steps[keep].copy()
         new.correction_replay = self.correction_replay.take(keep)
         new.correction_rngs = [self.correction_rngs[m] for m in keep]
+        new.owed_corrections = self.owed_corrections[keep].copy()
         return new
 
     def member_weights(self, m: int) -> dict[str, torch.Tensor]:
@@ -382,6 +423,7 @@ class ResidualLearner(DQNLearner):
             "adam_exp_avg_sq": [avg_sq[m].clone() for avg_sq in adam.exp_avg_sq],
             "replay": self.correction_replay.member_state(m),
             "rng": self.correction_rngs[m].bit_generator.state,
+            "owed": float(self.owed_corrections[m]),
             "prior": self.prior,
             "epsilon": self.correction_epsilon,
         }
@@ -405,6 +447,7 @@ class ResidualLearner(DQNLearner):
         adam.steps[m] = int(saved["adam_steps"])
         self.correction_replay.load_member_state(m, saved["replay"])
         self.correction_rngs[m].bit_generator.state = saved["rng"]
+        self.owed_corrections[m] = float(saved["owed"])
         self.prior, self.correction_epsilon = float(saved["prior"]), float(saved["epsilon"])
 
 
