@@ -12,7 +12,8 @@ The predator's value of mode m with a correction of k steps of 30° is
   its replay with importance weight 0 and priority ε, so it moves nothing there.
 - ``Â`` is a network of its own (:class:`CorrectionNetwork`, outputs for the four non-zero
   corrections of each mode only, its last layer zero at the start) with its own Adam and its own
-  replay of the corrected transitions alone: only they move it. It learns the one-step advantage
+  replay of the corrected transitions alone, updated at the mode learner's replay ratio counted
+  on those transitions: only they move it. It learns the one-step advantage
   of turning k · 30° and then going on as the mode learner's policy does,
   ``y = r + γ (1 − terminated) Q̄_mode(s', argmax Q_mode(s', ·)) − Q_mode(s, m)`` (Q̄: the mode
   learner's target network): the target the mode learner fits on the rule's transitions, less
