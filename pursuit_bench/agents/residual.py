@@ -18,7 +18,8 @@ The predator's value of mode m with a correction of k steps of 30° is
   ``y = r + γ (1 − terminated) Q̄_mode(s', argmax Q_mode(s', ·)) − Q_mode(s, m)`` (Q̄: the mode
   learner's target network): the target the mode learner fits on the rule's transitions, less
   its fit. The mode's value and the correction's share one continuation, and the greedy
-  correction is one step of policy improvement on the hierarchical predator.
+  correction is one step of policy improvement on the hierarchical predator (where the values
+  are exact).
 - ``c`` (:data:`CORRECTION_PRIOR`) is a fixed part of C, not a starting value: a correction is
   greedy where its learned advantage exceeds c per 30° turned.
 
