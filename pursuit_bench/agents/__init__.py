@@ -19,16 +19,16 @@ from pursuit_bench.io.lazy import submodule_getattr
 if TYPE_CHECKING:
     from pursuit_bench.agents.dqn import DQNLearner
     from pursuit_bench.agents.kinds import (
-        KINDS,
         FlatPredator,
         HierarchicalPredator,
         LearningAgent,
         Prey,
-        ResidualPredator,
         ScriptedAgent,
     )
     from pursuit_bench.agents.network import DuelingQNetwork
+    from pursuit_bench.agents.registry import KINDS
     from pursuit_bench.agents.replay import PrioritizedReplay
+    from pursuit_bench.agents.residual import ResidualLearner, ResidualPredator
 
 __all__ = [
     "KINDS",
@@ -43,18 +43,20 @@ __all__ = [
     "LearningAgent",
     "Prey",
     "PrioritizedReplay",
+    "ResidualLearner",
     "ResidualPredator",
     "ScriptedAgent",
 ]
 
 _LAZY = {
     "DQNLearner": "dqn",
-    "KINDS": "kinds",
+    "KINDS": "registry",
     "FlatPredator": "kinds",
     "HierarchicalPredator": "kinds",
     "LearningAgent": "kinds",
     "Prey": "kinds",
-    "ResidualPredator": "kinds",
+    "ResidualLearner": "residual",
+    "ResidualPredator": "residual",
     "ScriptedAgent": "kinds",
     "DuelingQNetwork": "network",
     "PrioritizedReplay": "replay",

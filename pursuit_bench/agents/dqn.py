@@ -109,25 +109,6 @@ class DQNLearner:
         self._owed_updates = 0.0  # replay_ratio × transitions, not yet done
         self._next_target_copy = config.target_update_every
 
-    def tie_initial_advantages(self, rows: Sequence[int], offsets: Sequence[float]) -> None:
-        """Before any learning: give every action the advantage weights of action ``rows[a]``
-        and add ``offsets[a]`` to its bias, in the online and target networks alike (in place:
-        the flat parameter tensors see it). Actions tied to one row have the same Q-value in
-        every state but for their offsets: how the residual predator starts as its rule."""
-        if self.steps or self.updates:
-            raise ValueError("tie_initial_advantages: the learner has already stored or learned transitions")
-        if len(rows) != self.n_actions or len(offsets) != self.n_actions:
-            raise ValueError(
-                f"tie_initial_advantages needs {self.n_actions} rows and offsets, got {len(rows)}, {len(offsets)}"
-            )
-        index = torch.as_tensor(list(rows))
-        shift = torch.as_tensor(list(offsets), dtype=torch.float32)
-        with torch.no_grad():
-            for net in (self.online, self.target):
-                layer = net.advantage2
-                layer.weight.data.copy_(layer.weight.data[:, :, index].clone())
-                layer.bias.data.copy_(layer.bias.data[:, :, index].clone() + shift)
-
     @property
     def epsilon(self) -> float:
         return self.config.epsilon(self.steps)

@@ -6,10 +6,8 @@
 - :class:`Prey`: the network picks one of the 12 directions (A = 12).
 - :class:`FlatPredator` (ablation): the network picks one of the 24 (mode, direction) pairs,
   action ``a = 12 · mode + direction``; no rule.
-- :class:`ResidualPredator` (the paper's future work, residual RL): the network picks the mode
-  and a correction of the rule's direction by k ∈ {0, −1, +1, −2, +2} of the 12 directions
-  (±60° in 30° steps), action ``a = 5 · mode + j`` with k = ``CORRECTIONS[j]``; it starts as the
-  rule (:meth:`ResidualPredator.prepare`).
+- The residual predator (the paper's future work, residual RL) has a module of its own,
+  :mod:`pursuit_bench.agents.residual`; :mod:`pursuit_bench.agents.registry` names every kind.
 - :class:`ScriptedAgent`: a scripted policy (always-chase, always-stalk, fleeing prey) behind
   the same ``act`` / ``act_batch`` interface.
 
@@ -20,11 +18,13 @@ stack (B, n_obs). A learning agent is member ``member`` of a :class:`DQNLearner`
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
 
+from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner
 from pursuit_bench.env.task import N_DIRECTIONS
 from pursuit_bench.rules.navigation import navigate
@@ -41,6 +41,13 @@ class LearningAgent:
         if learner.n_actions != self.n_actions:
             raise ValueError(f"{self.kind} needs a learner with {self.n_actions} actions, got {learner.n_actions}")
         self.name, self.learner, self.member = name, learner, member
+
+    @classmethod
+    def new_learner(
+        cls, n_obs: int, config: AgentConfig, *, members: int = 1, seed: int | Sequence[int] = 0
+    ) -> DQNLearner:
+        """A learner for ``members`` agents of this kind (one seed per member, or one)."""
+        return DQNLearner(n_obs, cls.n_actions, config, members=members, seed=seed)
 
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
         """Env actions for the network's choices (B,) given the observations (B, n_obs)."""
@@ -113,59 +120,6 @@ class HierarchicalPredator(LearningAgent):
         return q
 
 
-#: The residual predator's corrections, in steps of 30° (index j of an action ``5 · mode + j``):
-#: no correction first, so that where the network cannot tell the actions apart it keeps the rule.
-CORRECTIONS = (0, -1, 1, -2, 2)
-#: At initialisation each correction's Q-value is the zero correction's minus this much per step
-#: of 30°: far above float rounding, far below any return the network learns.
-CORRECTION_TIE_BREAK = 1e-3
-
-
-class ResidualPredator(HierarchicalPredator):
-    """Residual RL on the rule (Johannink et al. 2019; Silver et al. 2018): the network picks the
-    mode and a correction k of the direction the lower layer picks (with obstacles, after
-    avoidance), ``(navigate(obs, mode) + k) mod 12``. Its learner starts with every correction's
-    advantage weights tied to the zero correction's (:meth:`prepare`): before learning it does
-    exactly what the hierarchical predator does with the same mode choices."""
-
-    kind = "residual"
-    n_actions = 2 * len(CORRECTIONS)
-
-    @staticmethod
-    def split(choices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(modes, corrections k)`` of actions ``5 · mode + j``."""
-        modes, j = np.divmod(np.asarray(choices), len(CORRECTIONS))
-        return modes, np.asarray(CORRECTIONS)[j]
-
-    @staticmethod
-    def action(modes: np.ndarray | int, corrections: np.ndarray | int) -> np.ndarray:
-        """The actions ``5 · mode + j`` for modes and corrections k (inverse of :meth:`split`)."""
-        index = {k: j for j, k in enumerate(CORRECTIONS)}
-        j = np.vectorize(index.__getitem__)(np.asarray(corrections))
-        return np.asarray(modes) * len(CORRECTIONS) + j
-
-    def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        modes, corrections = self.split(choices)
-        rule = navigate(obs, modes, avoidance=self.avoidance)
-        return np.stack([modes, (rule + corrections) % N_DIRECTIONS], axis=-1)
-
-    @staticmethod
-    def mode_q(q: np.ndarray) -> np.ndarray:
-        """Each mode's best Q-value over its corrections (…, 2)."""
-        q = np.asarray(q)
-        return q.reshape(*q.shape[:-1], 2, len(CORRECTIONS)).max(axis=-1)
-
-    @staticmethod
-    def prepare(learner: DQNLearner) -> None:
-        """Tie every correction's advantage to its mode's zero correction, less
-        :data:`CORRECTION_TIE_BREAK` per step of 30°: the greedy action is then the zero correction
-        in every state until learning separates them."""
-        n = len(CORRECTIONS)
-        rows = [mode * n for mode in range(2) for _ in CORRECTIONS]
-        offsets = [-CORRECTION_TIE_BREAK * abs(k) for _ in range(2) for k in CORRECTIONS]
-        learner.tie_initial_advantages(rows, offsets)
-
-
 class Prey(LearningAgent):
     """Deep RL over the 12 directions."""
 
@@ -215,8 +169,3 @@ def members_to_env(agents: list[LearningAgent], choices: np.ndarray, obs: np.nda
     ):
         return list(first.to_env(choices, obs))
     return [agent.to_env(choices[m], obs[m]) for m, agent in enumerate(agents)]
-
-
-KINDS: dict[str, type[LearningAgent]] = {
-    k.kind: k for k in (HierarchicalPredator, Prey, FlatPredator, ResidualPredator)
-}

@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench.agents.kinds import HierarchicalPredator, ResidualPredator
+from pursuit_bench.agents.kinds import HierarchicalPredator
+from pursuit_bench.agents.residual import ResidualPredator
 from pursuit_bench.env.task import N_DIRECTIONS
 from pursuit_bench.rules.navigation import navigate
 from pursuit_bench.training.evaluate import Actor, run_episodes

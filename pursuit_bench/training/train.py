@@ -28,14 +28,8 @@ import torch
 
 from pursuit_bench.agents.checkpoint import agent_state, load_agent_state
 from pursuit_bench.agents.dqn import DQNLearner
-from pursuit_bench.agents.kinds import (
-    KINDS,
-    HierarchicalPredator,
-    LearningAgent,
-    ResidualPredator,
-    ScriptedAgent,
-    members_to_env,
-)
+from pursuit_bench.agents.kinds import HierarchicalPredator, LearningAgent, ScriptedAgent, members_to_env
+from pursuit_bench.agents.registry import KINDS
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
@@ -113,12 +107,8 @@ def build_agents(
     groups = []
     for key, members in plans.items():
         seeds = [member_seed(configs[r].seed, i) for r, i, _ in members]
-        learner = DQNLearner(
-            key[1], kinds[key].n_actions, configs[members[0][0]].agent, members=len(members), seed=seeds
-        )
         kind = kinds[key]
-        if issubclass(kind, ResidualPredator):
-            kind.prepare(learner)  # starts as the rule
+        learner = kind.new_learner(key[1], configs[members[0][0]].agent, members=len(members), seed=seeds)
         made = [
             kind(name, learner, m, avoidance=configs[r].avoids)
             if issubclass(kind, HierarchicalPredator)
