@@ -71,10 +71,10 @@ def outside(trained: dict[str, Any], seeds: dict[str, Any]) -> list[str]:
 #: The answer's table: its rows' labels, and what each row counts (``pool.summarise``'s panels at
 #: the last budget, or the reproduction's verdicts against the fixed modes).
 ANSWER_ROWS = (
-    ("hierarchical − flat, return against the pool (primary)", "return"),
-    ("hierarchical − flat, margin over the fixed modes", "margin"),
-    ("hierarchical − flat, margin averaged over budgets (head start)", "learning_speed"),
-    ("learned stalk/chase switch − better fixed mode (both use the rule)", "fixed_modes"),
+    ("hierarchical − flat: return against the pool at {last:,} episodes (**primary**)", "return"),
+    ("hierarchical − flat: margin over the fixed modes at {last:,} episodes", "margin"),
+    ("hierarchical − flat: margin averaged over {first}–{last:,} episodes (head start)", "learning_speed"),
+    ("learned stalk/chase switch − better fixed mode at {last:,} episodes (both steer by the rule)", "fixed_modes"),
 )
 POOL = ROOT / "results" / "pool" / "pool.json"
 REPRODUCTION = ROOT / "results" / "reproduction"
@@ -102,7 +102,7 @@ def answer() -> dict[str, Any]:
     panel = next(p for p in last["margin"]["panels"] if p["condition"] == "1p-high")
     return {
         "rows": rows,
-        "budget": last["episodes"],
+        "budgets": {"first": summary["budgets"][0]["episodes"], "last": last["episodes"]},
         "panels": len(verdicts),
         "split": {
             kind: {
@@ -119,10 +119,13 @@ def answer_table(counts: dict[str, Any]) -> str:
     """The README's table of the answer, from ``answer()``."""
     header = ("panels", "rule ahead", "equivalent (±0.05)", "not resolved", "rule behind")
     lines = [
-        f"| {counts['budget']:,} episodes, per panel | " + " | ".join(header) + " |",
+        "| comparison, per panel | " + " | ".join(header) + " |",
         "|---|---:|---:|---:|---:|---:|",
     ]
-    lines += [f"| {label} | " + " | ".join(map(str, counts["rows"][key])) + " |" for label, key in ANSWER_ROWS]
+    lines += [
+        f"| {label.format(**counts['budgets'])} | " + " | ".join(map(str, counts["rows"][key])) + " |"
+        for label, key in ANSWER_ROWS
+    ]
     return "\n".join(lines)
 
 
@@ -134,8 +137,9 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
         f"the rule helps in {ret[1]} of the {ret[0]} panels compared so far and the flat learner in {ret[4]}; "
         f"{ret[3]} are not resolved, and {counts['panels'] - ret[0]} panels",
         f"ahead in {speed[1]} of the {speed[0]} panels and behind in {'none' if speed[4] == 0 else speed[4]}",
-        f"in 1p-high, {flat['below']} of its {flat['runs']} runs fall below the better fixed mode (of the "
-        f"hierarchical runs, {hierarchical['below']}) and {flat['above']} beat every hierarchical run",
+        f"in 1p-high, {flat['below']} of its {flat['runs']} runs fall below the better fixed mode ("
+        + ("no hierarchical run does" if hierarchical["below"] == 0 else f"{hierarchical['below']} hierarchical do")
+        + f") and {flat['above']} beat every hierarchical run",
     ]
 
 
