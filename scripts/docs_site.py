@@ -276,7 +276,7 @@ def record_episode(path: Path) -> None:
 
     import pursuit_bench
     from pursuit_bench import pretrained
-    from pursuit_bench.agents.kinds import HierarchicalPredator
+    from pursuit_bench.agents import HierarchicalPredator
     from pursuit_bench.training.recording import RecordEpisodes
 
     agents = pretrained.load(EPISODE_CONDITION)

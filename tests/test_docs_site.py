@@ -90,21 +90,23 @@ def built_site(shared_dir: Path) -> tuple[Path, dict[str, object]]:
 @pytest.fixture(scope="session")
 def browser_visit(built_site: tuple[Path, dict[str, object]], shared_dir: Path) -> list[site_check.PageReport]:
     """Every built page opened in headless Chromium, once (across xdist's workers: the first one
-    visits, the others read its reports); every page's screenshot in ``shared_dir/site-shots/``."""
+    visits, the others read its reports); the viewer's screenshot in ``shared_dir/episode.png``."""
     site, build = built_site
     assert build["returncode"] == 0, build["output"]
     assert CHROMIUM is not None
-    saved, shots = shared_dir / "browser-visit.json", shared_dir / "site-shots"
+    saved, shot = shared_dir / "browser-visit.json", shared_dir / "episode.png"
     with locked(shared_dir / "browser-visit.lock"):
         if not saved.exists():
-            reports = site_check.check_site(site, chromium=CHROMIUM, shots=shots, timeout=180)
+            reports = site_check.check_site(site, chromium=CHROMIUM, timeout=180)
             for report in reports:
+                if report.viewer_colours is not None and report.screenshot is not None:
+                    shot.write_bytes(report.screenshot)
                 report.screenshot = None
             saved.write_text(json.dumps([dataclasses.asdict(report) for report in reports]))
     reports = [site_check.PageReport(**fields) for fields in json.loads(saved.read_text())]
     for report in reports:
-        if report.viewer_colours is not None:
-            report.screenshot = (shots / "episode.png").read_bytes()
+        if report.viewer_colours is not None and shot.exists():
+            report.screenshot = shot.read_bytes()
     return reports
 
 
@@ -226,7 +228,7 @@ def test_every_page_loads_in_chromium_without_errors_and_with_its_images(
 def test_the_episode_page_draws_the_arena(browser_visit: list[site_check.PageReport], shared_dir: Path) -> None:
     (episode,) = [r for r in browser_visit if r.url.endswith("/" + site_check.EPISODE_PAGE)]
     assert episode.screenshot is not None
-    shot = shared_dir / "site-shots" / "episode.png"
+    shot = shared_dir / "episode.png"
     assert episode.prey_pixels and episode.prey_pixels > 50, f"no prey drawn: {shot}"
     assert episode.viewer_colours and episode.viewer_colours > 100, f"a blank viewer: {shot}"
 
