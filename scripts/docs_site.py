@@ -270,16 +270,29 @@ def viewer_versions() -> tuple[str, str]:
 
 
 def record_episode(path: Path) -> None:
-    """One episode of the shipped agents of ``EPISODE_CONDITION``, greedy, into ``path``."""
+    """One episode of the shipped agents of ``EPISODE_CONDITION``, greedy, into ``path``, with
+    the predators' Q-values for stalk and chase and V(s) at every step (the viewer's Q-values panel)."""
+    import numpy as np
+
     import pursuit_bench
     from pursuit_bench import pretrained
+    from pursuit_bench.agents import HierarchicalPredator
     from pursuit_bench.training.recording import RecordEpisodes
 
     agents = pretrained.load(EPISODE_CONDITION)
     env = RecordEpisodes(pursuit_bench.parallel_env(EPISODE_CONDITION), path)
+    predators = [a for a in env.possible_agents if isinstance(agents[a], HierarchicalPredator)]
+    assert len(predators) == len(env.possible_agents) - 1, "the episode's predators are hierarchical"
     obs, _ = env.reset(seed=EPISODE_SEED)
     while env.agents:
-        obs, *_ = env.step({a: agents[a].act(obs[a]) for a in env.agents})
+        q_values, values = np.zeros((len(predators), 2)), np.zeros(len(predators))
+        for i, name in enumerate(predators):
+            agent = agents[name]
+            assert isinstance(agent, HierarchicalPredator)
+            _, _, q, v = agent.decide(np.asarray(obs[name])[None], explore=False)
+            q_values[i], values[i] = agent.mode_q(q)[0], v[0]
+        actions = {a: agents[a].act(obs[a]) for a in env.agents}
+        obs, *_ = env.step(actions, q_values=q_values, values=values)
     env.close()
 
 

@@ -2,7 +2,7 @@
 ``pursuit-bench report`` makes every table and figure of REPRODUCTION.md again without the run
 folders (``tests/test_reproduction.py`` checks it).
 
-    python scripts/export_results.py /work/sweeps/repro1000 /work/sweeps/repro1000-flat \\
+    python scripts/export_results.py sweeps/repro1000 sweeps/repro1000-flat \\
         --out results/reproduction --command "pursuit-bench sweep ..."
 
 Per run: its evaluations (final and kept checkpoints) with every episode's return and the prey

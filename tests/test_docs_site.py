@@ -1,9 +1,10 @@
 """The documentation site (mkdocs.yml, docs/site.md): built strictly, every page opened in headless
-Chromium, and every tutorial run as written.
+Chromium (driven by Playwright), and every tutorial run as written.
 
 The build and the browser's visit are made once per test session (across pytest-xdist's
-workers: a file lock, the first worker builds) and shared. Without the docs extra the site's
-tests are skipped, saying so; without Chromium, the browser's.
+workers: a file lock, the first worker builds) and shared by every test that needs them.
+Without the docs extra the site's tests are skipped, saying so; without Chromium or Playwright,
+the browser's.
 """
 
 from __future__ import annotations
@@ -42,10 +43,8 @@ needs_docs = pytest.mark.skipif(
     reason=f"the docs extra is not installed ({', '.join(MISSING) or 'mkdocs'}): bash scripts/install.sh test,docs",
 )
 CHROMIUM = site_check.find_chromium()
-needs_chromium = pytest.mark.skipif(
-    CHROMIUM is None,
-    reason="Chromium is not installed (Debian: apt-get install chromium; scripts/install.sh test,docs does it as root)",
-)
+NO_BROWSER = site_check.missing()
+needs_chromium = pytest.mark.skipif(NO_BROWSER is not None, reason=f"no browser checks: {NO_BROWSER}")
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
 #: Each Python or bash block of a tutorial may take this long (a training run, a Ray sweep).
 BLOCK_TIMEOUT = 600
@@ -98,7 +97,7 @@ def browser_visit(built_site: tuple[Path, dict[str, object]], shared_dir: Path) 
     saved, shot = shared_dir / "browser-visit.json", shared_dir / "episode.png"
     with locked(shared_dir / "browser-visit.lock"):
         if not saved.exists():
-            reports = site_check.check_site(site, chromium=CHROMIUM, timeout=180, log=shared_dir / "chromium.log")
+            reports = site_check.check_site(site, chromium=CHROMIUM, timeout=180)
             for report in reports:
                 if report.viewer_colours is not None and report.screenshot is not None:
                     shot.write_bytes(report.screenshot)
@@ -163,6 +162,8 @@ def test_the_site_builds_strictly_with_every_page_and_the_viewer(built_site: tup
         folder = source.removesuffix("index.md") if source.endswith("index.md") else source.removesuffix(".md") + "/"
         built = site / folder / "index.html"
         assert built.exists(), source
+    home = (site / "index.html").read_text()
+    assert '<a href="reproduction/">REPRODUCTION.md</a>' in home and "What the project found" in home
     card = (site / "env" / "index.html").read_text()
     assert all(f"<code>{name}</code>" in card for name in pursuit_bench.CONDITIONS)
     assert "Version History" in card and "<!-- docs_site" not in card
@@ -176,6 +177,32 @@ def test_the_site_builds_strictly_with_every_page_and_the_viewer(built_site: tup
     writer, viewer = docs_site.viewer_versions()
     assert written == writer == viewer, (written, writer, viewer)
     assert (assets / "re_viewer_bg.wasm").stat().st_size > 10_000_000 and (assets / "widget.js").exists()
+    # the recording holds every step's Q-values, and each predator chose the mode of the larger one
+    rows = recorded(assets / "episode.rrd")
+    for predator in ("predator_0", "predator_1"):
+        stalk, chase = rows[f"/values/{predator}/q_stalk"], rows[f"/values/{predator}/q_chase"]
+        assert len(stalk) == len(chase) == len(rows[f"/rewards/{predator}"]) > 10
+        switches = dict(rows[f"/modes/{predator}"])
+        mode, chose = "stalk", []
+        for (step, s), (_, c) in zip(stalk, chase, strict=True):
+            mode = switches.get(step, mode)
+            chose.append((mode == "chase") == (c > s))
+        assert all(chose), predator
+
+
+def recorded(path: Path) -> dict[str, list[tuple[int, object]]]:
+    """A recording's rows per entity, in file order: (step, first value) of every non-static row."""
+    import rerun.chunk as rc
+
+    rows: dict[str, list[tuple[int, object]]] = {}
+    for chunk in rc.RrdReader(path).store().stream():
+        if chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        column = next(name for name in batch.schema.names if ":" in name)
+        values = [v[0] if isinstance(v, list) and v else v for v in batch.column(column).to_pylist()]
+        rows.setdefault(str(chunk.entity_path), []).extend(zip(batch.column("step").to_pylist(), values, strict=True))
+    return rows
 
 
 # ---------------------------------------------------------------- in the browser
@@ -210,11 +237,15 @@ def test_the_episode_page_draws_the_arena(browser_visit: list[site_check.PageRep
 @pytest.mark.slow
 def test_the_browser_check_catches_errors_broken_images_and_a_blank_viewer(tmp_path: Path) -> None:
     """The checker itself, on a site of three pages made here: a clean one, one with a console
-    error, an uncaught exception and a missing image, and an episode page whose viewer draws nothing."""
+    error, an uncaught exception, a missing image and a name broken across lines in a narrow
+    table, and an episode page whose viewer draws nothing."""
     (tmp_path / "ok").mkdir()
-    (tmp_path / "ok" / "index.html").write_text("<!doctype html><title>ok</title><p>fine</p>")
+    (tmp_path / "ok" / "index.html").write_text(
+        "<!doctype html><title>ok</title><p>fine</p><table><tr><td><code>2p-low-individual</code></td></tr></table>"
+    )
     (tmp_path / "index.html").write_text(
         "<!doctype html><title>bad</title><img src='missing.png'>"
+        "<table style='width: 60px'><tr><td><code>2p-low-individual</code></td><td>wide text</td></tr></table>"
         "<script>console.error('boom'); setTimeout(() => { throw new Error('late'); });</script>"
     )
     (tmp_path / "episode").mkdir()
@@ -228,6 +259,8 @@ def test_the_browser_check_catches_errors_broken_images_and_a_blank_viewer(tmp_p
     bad = reports[""].problems
     assert any("boom" in p for p in bad) and any("late" in p for p in bad), bad
     assert any(p.startswith("image did not load") and "missing.png" in p for p in bad), bad
+    assert any("404" in p and "missing.png" in p for p in bad), bad  # the failed load itself
+    assert "a name in a table is broken across lines: 2p-low-individual" in bad, bad
     assert any("drew no arena" in p for p in reports["episode/"].problems), reports["episode/"].problems
 
 
@@ -269,7 +302,7 @@ def kill_namespace(marker: Path) -> None:
 
 
 @pytest.fixture
-def run_block(tmp_path: Path) -> Iterator[Callable[[list[str], bool], subprocess.CompletedProcess[str]]]:
+def run_block(tmp_path: Path) -> Iterator[Callable[..., subprocess.CompletedProcess[str]]]:
     """``run(command, isolated)`` in the tutorial's empty folder, the venv's commands first on the
     PATH; ``isolated``: inside a network namespace of its own holding only loopback, whose
     processes are all killed at the end whatever happens."""
@@ -281,7 +314,7 @@ def run_block(tmp_path: Path) -> Iterator[Callable[[list[str], bool], subprocess
         "RAY_USAGE_STATS_ENABLED": "0",
     }
 
-    def run(command: list[str], isolated: bool) -> subprocess.CompletedProcess[str]:
+    def run(command: list[str], isolated: bool, stdin: str | None = None) -> subprocess.CompletedProcess[str]:
         if isolated:
             namespace = namespace_command()
             assert namespace is not None
@@ -291,6 +324,7 @@ def run_block(tmp_path: Path) -> Iterator[Callable[[list[str], bool], subprocess
             command,
             cwd=tmp_path,
             env=env,
+            input=stdin,
             capture_output=True,
             text=True,
             timeout=BLOCK_TIMEOUT,
@@ -314,25 +348,73 @@ def tutorial_skip(page: Path) -> str | None:
     return None
 
 
+#: Runs the Python blocks it reads (a JSON list) one after another in one interpreter, each in a
+#: namespace of its own as if in a fresh one: a block still cannot lean on another's names, and
+#: the imports are paid once.
+BLOCKS_RUNNER = """
+import json, sys
+for number, code in enumerate(json.load(sys.stdin), 1):
+    exec(compile(code, f"<python block {number} of this run>", "exec"), {"__name__": "__main__"})
+"""
+
+
+def runs(page: Path) -> list[tuple[str, list[str], str | None]]:
+    """What running a tutorial as written takes, in order: ("python", consecutive Python blocks,
+    None), ("bash", [block], None) or ("file", [block], its title) for a block saved under its name."""
+    out: list[tuple[str, list[str], str | None]] = []
+    for language, code, title in blocks(page):
+        if language not in ("python", "bash"):
+            continue
+        if title is not None:
+            out.append(("file", [code], title))
+        elif language == "python" and out and out[-1][0] == "python":
+            out[-1][1].append(code)
+        else:
+            out.append((language, [code], None))
+    return out
+
+
+def test_a_tutorial_s_consecutive_python_blocks_share_an_interpreter_and_nothing_else(tmp_path: Path) -> None:
+    page = tmp_path / "t.md"
+    page.write_text(
+        "```python\nx = 1\n```\n\n```python\nprint(x)\n```\n\n```bash\ntrue\n```\n\n"
+        '```python title="m.py"\ny = 2\n```\n\n```python\nimport m\n```\n'
+    )
+    assert runs(page) == [
+        ("python", ["x = 1", "print(x)"], None),
+        ("bash", ["true"], None),
+        ("file", ["y = 2"], "m.py"),
+        ("python", ["import m"], None),
+    ]
+    done = subprocess.run(
+        [sys.executable, "-c", BLOCKS_RUNNER], input=json.dumps(["x = 1", "print(x)"]), capture_output=True, text=True
+    )
+    assert done.returncode == 1 and "NameError" in done.stderr and "<python block 2 of this run>" in done.stderr
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("page", TUTORIALS, ids=[p.stem for p in TUTORIALS])
 def test_the_tutorial_runs_as_written(
-    page: Path, tmp_path: Path, run_block: Callable[[list[str], bool], subprocess.CompletedProcess[str]]
+    page: Path, tmp_path: Path, run_block: Callable[..., subprocess.CompletedProcess[str]]
 ) -> None:
     reason = tutorial_skip(page)
     if reason:
         pytest.skip(reason)
     isolated = "--backend ray" in page.read_text()
-    runnable = [(language, code, title) for language, code, title in blocks(page) if language in ("python", "bash")]
-    assert any(title is None for _, _, title in runnable), f"{page.name}: no block to run"
-    for language, code, title in runnable:
-        if title is not None:
-            (tmp_path / title).write_text(code)
+    steps = runs(page)
+    assert any(kind != "file" for kind, _, _ in steps), f"{page.name}: no block to run"
+    for kind, codes, title in steps:
+        if kind == "file":
+            assert title is not None
+            (tmp_path / title).write_text(codes[0])
             continue
-        command = [sys.executable, "-c", code] if language == "python" else ["bash", "-euo", "pipefail", "-c", code]
-        done = run_block(command, isolated)
+        if kind == "python":
+            done = run_block([sys.executable, "-c", BLOCKS_RUNNER], isolated, json.dumps(codes))
+        else:
+            done = run_block(["bash", "-euo", "pipefail", "-c", codes[0]], isolated)
+        shown = "\n\n".join(codes)
         assert done.returncode == 0, (
-            f"{page.name}, this {language} block failed:\n{code}\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+            f"{page.name}, this {kind} run failed:\n{shown}\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
         )
 
 

@@ -187,10 +187,11 @@ def test_single_agent_view_uses_given_opponents() -> None:
 
 
 def test_every_name_the_readme_gives_works_as_written_after_importing_the_package() -> None:
-    """Each dotted ``pursuit_bench.…`` name in the README is reached, in a fresh interpreter, by
-    attributes alone after ``import pursuit_bench`` (the layers import their modules on first
-    use), as a user types it."""
-    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    """Each dotted ``pursuit_bench.…`` name in the README and in docs/use.md (the env from Python)
+    is reached, in a fresh interpreter, by attributes alone after ``import pursuit_bench`` (the
+    layers import their modules on first use), as a user types it."""
+    root = Path(__file__).resolve().parent.parent
+    readme = (root / "README.md").read_text() + (root / "docs" / "use.md").read_text()
     names = sorted(set(re.findall(r"pursuit_bench(?:\.[A-Za-z_][A-Za-z_0-9]*)+", readme)))
     assert {"pursuit_bench.training.evaluate.evaluate_agents", "pursuit_bench.rules.navigation"} <= set(names)
     code = (

@@ -35,21 +35,42 @@ def test_the_readme_quotes_the_training_runs_spread_over_seeds() -> None:
     assert check_readme.outside(moved, seeds) and "always_chase" in check_readme.outside(moved, seeds)[0]
 
 
-def python_blocks() -> list[str]:
-    """Every ```python block of the README, dedented (some sit in a list item)."""
+def test_the_readme_s_answer_is_what_the_committed_results_give() -> None:
+    """The answer's table and the sentences quoting its counts, recomputed from results/pool/ and
+    results/reproduction/; the README gives it before the env's use, in at most 150 lines."""
+    counts = check_readme.answer()
     text = check_readme.ROOT.joinpath("README.md").read_text()
-    blocks = re.findall(r"^( *)```python\n(.*?)^\1```", text, flags=re.S | re.M)
+    assert check_readme.answer_table(counts) in text
+    words = check_readme.readme()
+    for sentence in check_readme.answer_sentences(counts):
+        assert sentence in words
+    assert text.index("## What the project found") < text.index("## Use the env") and len(text.splitlines()) <= 150
+    assert "[REPRODUCTION.md](REPRODUCTION.md)" in text
+
+
+def test_the_readme_keeps_none_of_the_sentences_an_audit_found_wrong() -> None:
+    words = check_readme.readme().lower()
+    for wrong in ("without qualification", "gains nothing detectable", "spread widely", "on the same episodes"):
+        assert wrong not in words, wrong
+
+
+def python_blocks(path: Path) -> list[str]:
+    """Every ```python block of a Markdown file, dedented (some sit in a list item)."""
+    blocks = re.findall(r"^( *)```python\n(.*?)^\1```", path.read_text(), flags=re.S | re.M)
     return [textwrap.dedent("\n".join(line[len(indent) :] for line in body.splitlines())) for indent, body in blocks]
 
 
 @pytest.mark.slow
-def test_every_python_block_of_the_readme_runs_as_written_in_a_fresh_interpreter(tmp_path: Path) -> None:
+def test_every_python_block_of_the_readme_and_of_use_md_runs_as_written(tmp_path: Path) -> None:
+    """One interpreter per file, its blocks run one after another (as a reader would paste them);
+    docs/use.md loads the main job's run folder, trained here for 2 episodes."""
     code, output = run_cli(
         "train", "--condition", "1p-high", "--episodes", "2", "--no-record", "--out", str(tmp_path / "runs" / "demo")
     )
     assert code == 0, output
-    blocks = python_blocks()
-    assert len(blocks) >= 2 and "pursuit_v0" in blocks[0]
-    for block in blocks:
-        done = subprocess.run([sys.executable, "-c", block], cwd=tmp_path, capture_output=True, text=True)
-        assert done.returncode == 0, f"{block}\n{done.stderr}"
+    readme, use = python_blocks(check_readme.ROOT / "README.md"), python_blocks(check_readme.ROOT / "docs" / "use.md")
+    assert len(readme) == 1 and "pursuit_v0" in readme[0] and len(use) >= 2 and "load_agents" in use[0]
+    for blocks in (readme, use):
+        script = "\n\n".join(blocks)
+        done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
+        assert done.returncode == 0, f"{script}\n{done.stderr}"

@@ -474,7 +474,12 @@ class RecordEpisodes(BaseParallelWrapper):
         )
         return result
 
-    def step(self, actions: dict[str, Any]) -> Any:
+    def step(
+        self, actions: dict[str, Any], *, q_values: np.ndarray | None = None, values: np.ndarray | None = None
+    ) -> Any:
+        """The env's step; ``q_values`` (n_predators, 2) and ``values`` (n_predators,), if given,
+        are the predators' Q-values for (stalk, chase) and V(s) behind ``actions`` (NaN for a
+        predator without them), recorded with the step (give them at every step or at none)."""
         obs, rewards, terminated, truncated, infos = self.env.step(actions)
         if self._traces is not None:
             names = self._base.possible_agents
@@ -485,6 +490,8 @@ class RecordEpisodes(BaseParallelWrapper):
                 np.array([[rewards[a] for a in names]]),
                 np.array([[infos[a]["left_area"] for a in names]]),
                 np.array([[infos[a]["captured"] for a in predators]]),
+                None if q_values is None else np.asarray(q_values, dtype=np.float64)[None],
+                None if values is None else np.asarray(values, dtype=np.float64)[None],
             )
             if not self._base.agents:  # the episode ended
                 self._episodes += 1
