@@ -12,7 +12,9 @@ The code before is ``pursuit_bench/training/evaluate.py`` as it stood at commit 
 numbers (it says so). Noise: for ``--seeds`` evaluation seeds, each predator's mean paired
 difference trained − always-chase and trained − always-stalk over the episodes; their standard
 deviation over the seeds, before and after, and the standard deviation of the per-episode
-differences (after only: before, the variants' episodes are not matched one to one).
+differences (after only: before, the variants' episodes are not matched one to one). Also each
+one's mean episode length as trained: the code before kept the first episodes to *finish*, so with
+as many arenas as episodes it dropped the long ones and played fewer steps.
 One torch thread.
 """
 
@@ -82,11 +84,14 @@ def main() -> None:
     before = old_module()
     one(evaluate, args.condition, 4, 0)  # compile the kernels once for both
     times: dict[str, list[float]] = {"before": [], "after": []}
-    repeated = []
+    repeated, lengths = [], {}
     for _ in range(args.repeats):
-        times["before"].append(one(before, args.condition, args.episodes, 12345)[0])
+        took, result = one(before, args.condition, args.episodes, 12345)
+        times["before"].append(took)
+        lengths["before"] = result["episode_length"]
         took, result = one(evaluate, args.condition, args.episodes, 12345)
         times["after"].append(took)
+        lengths["after"] = result["episode_length"]
         repeated.append(json.dumps(result["panels"]))
     speed = {k: statistics.median(v) for k, v in times.items()}
     same = len(set(repeated)) == 1
@@ -120,6 +125,7 @@ def main() -> None:
         "median_seconds": speed,
         "speedup": speed["before"] / speed["after"],
         "repeats_exactly": same,
+        "mean_episode_length_trained": lengths,
         "difference_sd_over_seeds": spread,
         "evaluation_seeds": [1000 + s for s in range(args.seeds)],
         "episode_difference_sd_after": episode_sd,
