@@ -97,7 +97,8 @@ def main() -> None:
     same = len(set(repeated)) == 1
     print(
         f"{args.condition}, {args.episodes} episodes: before {speed['before']:.2f} s, after {speed['after']:.2f} s, "
-        f"speed-up {speed['before'] / speed['after']:.2f}x (median of {args.repeats}); repeats exactly: {same}"
+        f"speed-up {speed['before'] / speed['after']:.2f}x (median of {args.repeats}); repeats exactly: {same}; "
+        f"mean episode length as trained: before {lengths['before']:.1f}, after {lengths['after']:.1f} steps"
     )
     spread: dict[str, dict[str, Any]] = {}
     for name, module in (("before", before), ("after", evaluate)):
