@@ -150,7 +150,14 @@ def read_population(folder: Path) -> list[dict[str, Any]]:
 # --- evaluation of a judged run -----------------------------------------------------------------
 
 
-def evaluate_run(folder: Path, population: Path, *, episodes: int = EPISODES, seed: int = EVAL_SEED) -> dict[str, Any]:
+def evaluate_run(
+    folder: Path,
+    population: Path,
+    *,
+    episodes: int = EPISODES,
+    seed: int = EVAL_SEED,
+    budgets: tuple[int, ...] = BUDGETS,
+) -> dict[str, Any]:
     """A judged run's predators at every budget of :data:`BUDGETS` against each member of its
     condition's population (``population``: the condition's folder), by the CRN protocol: per
     budget and member, each predator's mean return as trained, as always-chase and as always-stalk
@@ -162,8 +169,8 @@ def evaluate_run(folder: Path, population: Path, *, episodes: int = EPISODES, se
 
     opponents = read_population(population)
     out: dict[str, Any] = {}
-    for budget in BUDGETS:
-        checkpoint = runs.CHECKPOINT if budget == BUDGETS[-1] else runs.milestone_checkpoint(budget)
+    for budget in budgets:
+        checkpoint = runs.CHECKPOINT if budget == budgets[-1] else runs.milestone_checkpoint(budget)
         config, agents, _ = runs.described(folder, checkpoint)
         evaluations = {}
         for member in opponents:
@@ -235,7 +242,12 @@ def pooled(evaluations: dict[str, Any], predator: str, leave_out: str | None = N
 
 def failed(run: dict[str, Any], predator: str, margin: float = FAILURE_MARGIN) -> bool:
     """Whether a judged run fails in a panel: its pool margin at the last budget below ``margin``."""
-    return pooled(run["pool"][str(BUDGETS[-1])], predator)["margin"] < margin
+    return pooled(run["pool"][last_budget(run)], predator)["margin"] < margin
+
+
+def last_budget(run: dict[str, Any]) -> str:
+    """The key of a run's last budget (its end of training)."""
+    return str(max(int(b) for b in run["pool"]))
 
 
 def seeds_wanted(runs: list[dict[str, Any]]) -> int:
@@ -248,7 +260,7 @@ def seeds_wanted(runs: list[dict[str, Any]]) -> int:
         complete = all(sum(r["kind"] == k for r in chosen) >= wanted for k in KINDS)
         if not complete:
             return wanted
-        predators = chosen[0]["pool"][str(BUDGETS[-1])][FLEEING]["panels"]
+        predators = chosen[0]["pool"][last_budget(chosen[0])][FLEEING]["panels"]
         if not any(failed(r, p) for r in chosen for p in predators):
             return wanted
         wanted += STEP_RUNS
