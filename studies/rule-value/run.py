@@ -154,6 +154,15 @@ def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str
 
     out = args.results / "runs"
     out.mkdir(parents=True, exist_ok=True)
+    marker = args.results / "rule-study.json"  # what `pursuit-bench report` knows the folder by
+    if not marker.exists():
+        about = {
+            "format": rule_study.FORMAT,
+            "protocol": "REPRODUCTION.md, Protocol of the rule study",
+            "population": rule_study.POPULATION,
+            "command": "python studies/rule-value/run.py " + " ".join(sys.argv[1:]),
+        }
+        marker.write_text(json.dumps(about, indent=2) + "\n")
     budgets = list(rule_study.BUDGETS) if args.budgets is None else [int(b) for b in args.budgets.split(",")]
     keep = tuple(budgets[:-1])
     for condition in conditions:
