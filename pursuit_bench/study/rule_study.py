@@ -91,6 +91,7 @@ def write_population(where: Path, condition: str, prey: dict[str, Any], trained:
     from pursuit_bench.io.files import atomic_write_text
 
     folder = where / condition
+    folder.mkdir(parents=True, exist_ok=True)
     entries = []
     for member in members(condition):
         name = member["name"]
