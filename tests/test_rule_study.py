@@ -2,6 +2,7 @@
 twins, members round-trip through the population format, and the seed rule adds seeds where a
 condition's runs split and nowhere else."""
 
+import gzip
 import json
 from pathlib import Path
 
@@ -112,3 +113,13 @@ def test_the_seed_rule_adds_seeds_to_a_split_and_nowhere_else() -> None:
 def test_conditions_run_cheapest_first() -> None:
     ordered = rule_study.order()
     assert sorted(ordered) == sorted(CONDITIONS) and ordered[0].endswith("low") and ordered[-1] == "1p-high"
+
+
+def test_a_run_s_compact_result_keeps_its_own_seed(tmp_path: Path) -> None:
+    evaluation = {"protocol": "crn-1", "episodes": 60, "eval_seed": 12345, "seed": 12345, "pool": {}}
+    rule_study.write_run(tmp_path, "1p-high-flat-seed3", "1p-high", "flat", 3, "abc", evaluation)
+    (run,) = rule_study.read_runs(tmp_path)
+    assert (run["seed"], run["kind"], run["build"], run["eval_seed"]) == (3, "flat", "abc", 12345)
+    (tmp_path / "other.json.gz").write_bytes(gzip.compress(b'{"format": "x"}'))
+    with pytest.raises(ValueError, match="not a rule-study run"):
+        rule_study.read_runs(tmp_path)

@@ -197,22 +197,15 @@ def evaluate_run(
                 "capture_rate": result["capture_rate"],
             }
         out[str(budget)] = evaluations
-    return {"protocol": PROTOCOL, "episodes": episodes, "seed": seed, "pool": out}
+    return {"protocol": PROTOCOL, "episodes": episodes, "eval_seed": seed, "pool": out}
 
 
 def write_run(where: Path, name: str, condition: str, kind: str, seed: int, build: str, result: dict[str, Any]) -> Path:
     """One judged run's compact result, ``where/<name>.json.gz`` (written whole or not at all)."""
     from pursuit_bench.io.files import atomic_write_bytes
 
-    document = {
-        "format": FORMAT,
-        "name": name,
-        "condition": condition,
-        "kind": kind,
-        "seed": seed,
-        "build": build,
-        **result,
-    }
+    identity = {"format": FORMAT, "name": name, "condition": condition, "kind": kind, "seed": seed, "build": build}
+    document = {**result, **identity}  # the run's own seed, whatever the evaluation's result holds
     path = where / f"{name}.json.gz"
     atomic_write_bytes(path, gzip.compress(json.dumps(document).encode(), mtime=0))
     return path
