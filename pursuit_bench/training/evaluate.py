@@ -1,6 +1,8 @@
 """The paper's evaluation protocol: fixed agents played for many episodes in B arenas
-(:func:`run_episodes`), the protocol's variants and what they did (:func:`evaluate_agents`), and
-a run folder's evaluation written beside it (:func:`evaluate_folder`, :func:`evaluate_into`)."""
+(:func:`run_episodes`), the protocol's variants played together with common random numbers
+(:func:`play_variants`: episode e's start state and exploration draws depend on the evaluation
+seed, e and the agent alone) and what they did (:func:`evaluate_agents`), and a run folder's
+evaluation written beside it (:func:`evaluate_folder`, :func:`evaluate_into`)."""
 
 from __future__ import annotations
 

@@ -47,7 +47,7 @@ class SweepPlan:
     conditions: tuple[str, ...]
     """Conditions, in order (``pursuit_bench.CONDITIONS``)."""
     seeds: int
-    """Seeds 0 … seeds − 1 for every condition and predator kind."""
+    """How many seeds, from ``first_seed`` on, for every condition and predator kind."""
     predators: tuple[str, ...] = ("hierarchical",)
     """Predator kinds to train (``hierarchical``, ``flat``, or a fixed baseline)."""
     agent: AgentConfig = QUICK
