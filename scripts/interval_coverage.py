@@ -1,7 +1,8 @@
 """How often a 95 % interval over seeds holds the true mean: the t-interval the reports use
 (``pursuit_bench.study.statistics.coverage``) beside the percentile bootstrap they used before, on
 normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each; Welch's interval and the
-equivalence test at the pool study's 8 runs a kind; and the median's
+equivalence test at the pool study's 8 runs a kind and at the rule study's 10, 20 and 30 (with
+Wilson's interval of a failure share and the seed rule's type I error); and the median's
 interval the pursuit-law fits give over attacks, at 3–20 values. Prints the tables
 docs/statistics.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
 differences of results/reproduction are beside the simulated data, by the same measure.
@@ -94,6 +95,75 @@ def welch_checks(margin: float = 0.05, sd: float = 0.03) -> None:
         print(f"| {truth:+.2f} | {called:.1%} |")
 
 
+#: Runs a kind in the rule study (REPRODUCTION.md, "Protocol of the rule study"): 10 at first, 20
+#: and 30 where the seed rule adds them.
+STUDY_RUNS = (10, 20, 30)
+#: A split kind: most runs succeed near +0.2, a fifth fail near -0.2 (1p-high's flat runs, issue 47).
+SPLIT_FAILURE = 0.2
+
+
+def split(rng: np.random.Generator, shape: tuple[int, ...], failure: float = SPLIT_FAILURE) -> np.ndarray:
+    """Pool returns of a kind whose runs split: N(+0.2, 0.05) or, with probability ``failure``, N(-0.2, 0.1)."""
+    failed = rng.random(shape) < failure
+    return np.where(failed, rng.normal(-0.2, 0.1, shape), rng.normal(0.2, 0.05, shape))
+
+
+def rule_study_checks(margin: float = 0.05) -> None:
+    """The rule study's intervals at its seed counts: Welch's interval (normal, unequal spreads,
+    skewed, split against unsplit); Wilson's interval of a failure share; the type I error of the
+    primary test at a fixed 10 runs and under the seed rule (a failed run among a panel's first
+    10 of either kind: 10 more of both; again at 20; at most 30), both kinds split alike (no
+    difference); and how often equivalence within the margin is called at a true difference of
+    exactly the margin."""
+    split_truth = (1 - SPLIT_FAILURE) * 0.2 + SPLIT_FAILURE * -0.2
+    cases = (
+        *WELCH_CASES,
+        ("split (a fifth fail) against normal sd 0.05", split, lambda rng, s: rng.normal(split_truth, 0.05, s), 0.0),
+    )
+    print("\n| Welch | " + " | ".join(f"{n} runs a kind" for n in STUDY_RUNS) + " |\n|---|" + "---:|" * len(STUDY_RUNS))
+    for label, draw_h, draw_f, truth in cases:
+        held = []
+        for n in STUDY_RUNS:
+            rng = np.random.default_rng(n)
+            h, f = draw_h(rng, (DRAWS, n)), draw_f(rng, (DRAWS, n))
+            ci = [statistics.welch_difference(x, y)["ci"] for x, y in zip(h, f, strict=True)]
+            held.append(np.mean([lo <= truth <= hi for lo, hi in ci]))
+        print(f"| {label} | " + " | ".join(f"{c:.1%}" for c in held) + " |")
+    print(
+        "\n| failure share | " + " | ".join(f"{n} runs" for n in STUDY_RUNS) + " |\n|---:|" + "---:|" * len(STUDY_RUNS)
+    )
+    for share in (0.1, 0.3, 0.5):
+        held = []
+        for n in STUDY_RUNS:
+            counts = np.random.default_rng(n).binomial(n, share, DRAWS)
+            intervals = {c: statistics.wilson_interval(int(c), n) for c in np.unique(counts)}
+            held.append(np.mean([intervals[c][0] <= share <= intervals[c][1] for c in counts]))
+        print(f"| {share} | " + " | ".join(f"{c:.1%}" for c in held) + " |")
+    rng = np.random.default_rng(3)
+    fixed = rule = 0
+    sizes = []
+    for _ in range(DRAWS):
+        h, f = split(rng, (30,)), split(rng, (30,))
+        n = 10
+        while n < 30 and ((h[:n] < 0).any() or (f[:n] < 0).any()):
+            n += 10
+        sizes.append(n)
+        fixed += statistics.welch_difference(h[:10], f[:10])["p"] <= 2 * statistics.ALPHA
+        rule += statistics.welch_difference(h[:n], f[:n])["p"] <= 2 * statistics.ALPHA
+    print(
+        f"\nno true difference, both kinds split (a fifth fail): the primary test rejects {fixed / DRAWS:.1%} "
+        f"at 10 runs, {rule / DRAWS:.1%} under the seed rule (runs a kind: mean {np.mean(sizes):.1f}; "
+        f"30 in {np.mean(np.array(sizes) == 30):.0%})"
+    )
+    for n in STUDY_RUNS:
+        rng = np.random.default_rng(4)
+        h, f = rng.normal(margin, 0.05, (DRAWS, n)), rng.normal(0.0, 0.05, (DRAWS, n))
+        called = np.mean(
+            [statistics.equivalence(x, y, margin)["p"] <= statistics.ALPHA for x, y in zip(h, f, strict=True)]
+        )
+        print(f"true difference {margin:+.2f} (runs' sd 0.05), {n} runs a kind: called equivalent {called:.1%}")
+
+
 def pooled_skewness(groups: np.ndarray | list[np.ndarray]) -> float:
     """The sample skewness of values standardised within their group (a comparison's seeds)."""
     z = [(g - g.mean()) / g.std(ddof=1) for g in map(np.asarray, groups)]
@@ -127,6 +197,7 @@ def skewness_figures() -> dict[str, float]:
 def main() -> None:
     print(coverage_markdown())
     welch_checks()
+    rule_study_checks()
     print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (statistics.median_interval) |")
     print("|---:|---:|---:|")
     for sigma in (0.3, 0.6):

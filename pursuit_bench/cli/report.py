@@ -21,7 +21,8 @@ def report(where: Path, out: Path | None) -> None:
     `scripts/export_results.py` writes): report.md and report.json (the
     panels' verdicts, paired differences, per-seed counts, power), fig2.png, forest.png,
     counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary.
-    On a pool study's folder (pool.json, from `pursuit-bench pool`): pool-report.json, pool.md, pool.png."""
+    On a pool study's folder (pool.json, from `pursuit-bench pool`): pool-report.json, pool.md, pool.png.
+    On the rule study's folder (rule-study.json, runs/): rule-study-report.json, rule-study.md, rule-study.png."""
     if not where.is_dir():  # before the statistics and the figures are imported: a refusal comes at once
         raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
     from pursuit_bench.study import report as reports
@@ -33,6 +34,9 @@ def report(where: Path, out: Path | None) -> None:
         return
     if (where / "pool.json").is_file():
         _report_pool(where, out or where)
+        return
+    if (where / "rule-study.json").is_file():
+        _report_rule_study(where, out or where)
         return
     try:
         if out is not None:
@@ -63,6 +67,18 @@ def _report_pool(where: Path, out: Path) -> None:
         raise BadInput(str(error)) from None
     click.echo(pool.counts_markdown(summary))
     click.echo(f"written in {out}: pool-report.json, pool.md, pool.png")
+
+
+def _report_rule_study(where: Path, out: Path) -> None:
+    """The rule study (issue 47): its report from the judged runs' compact results (runs/)."""
+    from pursuit_bench.study import rule_report
+
+    try:
+        summary = rule_report.write_report(where, out)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")
+    click.echo(f"written in {out}: rule-study-report.json, rule-study.md, rule-study.png")
 
 
 def _report_run(folder: Path, out: Path) -> None:

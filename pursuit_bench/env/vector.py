@@ -109,6 +109,12 @@ class VectorPursuitEnv:
         self._returns[:] = 0.0
         return obs, {}
 
+    def reseed(self, arena: int, seed: int) -> None:
+        """Draw arena ``arena``'s next start states (from its next reset on) from a generator
+        seeded ``seed``: what a single env reset with ``seed`` draws first. An evaluation with
+        common random numbers gives each episode its own seed this way."""
+        self._rngs[arena] = np.random.default_rng(seed)
+
     def state_dict(self) -> dict[str, Any]:
         """Every arena as it is mid-episode, with its generator and return so far: with
         :meth:`load_state_dict`, an env that goes on exactly as this one would (a checkpoint)."""

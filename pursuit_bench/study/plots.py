@@ -602,9 +602,10 @@ def robust_png(result: dict[str, Any]) -> bytes:
     return _png(fig)
 
 
-def pool_png(summary: dict[str, Any]) -> bytes:
+def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     """Learning against budget against one pool of opponents: per condition, each kind's pool
-    margin (mean over predators) at every kept budget, mean over runs with its t-interval."""
+    margin (or the ``measure`` the curves hold: "pool return" for the rule study) (mean over
+    predators) at every kept budget, mean over runs with its t-interval."""
     curves = summary["curves"]
     conditions = list(curves)
     columns = 5
@@ -629,13 +630,13 @@ def pool_png(summary: dict[str, Any]) -> bytes:
         ax.tick_params(axis="y", labelsize=7)
         ax.set_title(conditions[i], fontsize=9)
         if i % columns == 0:
-            ax.set_ylabel("pool margin", fontsize=8)
+            ax.set_ylabel(measure, fontsize=8)
     axes.flat[0].legend(fontsize=7, loc="best")
     seeds = {k: len(v) for k, v in summary["seeds"].items()}
     budgets = [b["episodes"] for b in summary["budgets"]]
     fig.suptitle(
-        "Margin over the better fixed mode against one pool of opponents, by training episodes: mean over "
-        "the condition's predators\n"
+        ("Margin over the better fixed mode" if measure == "pool margin" else measure.capitalize())
+        + " against one pool of opponents, by training episodes: mean over the condition's predators\n"
         f"mean over runs ({seeds['hierarchical']} hierarchical, {seeds['flat']} flat), band: 95 % t-interval; "
         f"tick marks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)}), labelled where they fit",
         fontsize=10,

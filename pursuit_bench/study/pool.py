@@ -7,7 +7,9 @@ two) are not judged: their prey, at the end of training, form each condition's p
 by the paper's protocol (predators greedy, a learned prey ε-greedy with ε 0.1, FleeingPrey as it
 is; each predator replaced in turn by always-chase and by always-stalk on the same episodes), at
 every budget the sweep kept a checkpoint for. No judged run meets a prey it trained with, and
-both kinds meet the same prey on the same episodes: the prey of either kind learned against
+both kinds meet the same prey on the same episodes, with the same exploration draws (common random
+numbers since issue 47: ``pool.json``'s ``protocol``; a result without one was made before, its
+variants' draws from one generator in turn): the prey of either kind learned against
 predators of its own kind, so the pool holds as many of each.
 
 A run's **pool return** for a predator is its mean return over the pool's members (equal weight);
@@ -117,7 +119,7 @@ def play(
         if prey_from is None:
             prey = ScriptedAgent("prey_0", FleeingPrey(obstacles=bool(config.task_options.get("obstacles"))))
             protocol["prey_epsilon"] = None
-        else:  # read afresh for every evaluation: its exploration draws start from the checkpoint's generators
+        else:
             other, theirs, _ = runs.described(Path(prey_from))
             check_opponents(config, other)
             prey = theirs["prey_0"]
@@ -157,7 +159,10 @@ def run(
     layout = plan(sources, pool_seeds)
     jobs = _jobs(layout, budgets, episodes, cross_episodes, seed)
     # a kept evaluation is reused only for the same pool and budgets (an extended sweep's last budget differs)
+    from pursuit_bench.training.evaluate import PROTOCOL
+
     stamp = {
+        "protocol": PROTOCOL,  # evaluations kept by an earlier protocol are not reused (none before carried one)
         "episodes": episodes,
         "cross_episodes": cross_episodes,
         "seed": seed,

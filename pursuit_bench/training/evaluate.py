@@ -1,6 +1,8 @@
 """The paper's evaluation protocol: fixed agents played for many episodes in B arenas
-(:func:`run_episodes`), the protocol's variants and what they did (:func:`evaluate_agents`), and
-a run folder's evaluation written beside it (:func:`evaluate_folder`, :func:`evaluate_into`)."""
+(:func:`run_episodes`), the protocol's variants played together with common random numbers
+(:func:`play_variants`: episode e's start state and exploration draws depend on the evaluation
+seed, e and the agent alone) and what they did (:func:`evaluate_agents`), and a run folder's
+evaluation written beside it (:func:`evaluate_folder`, :func:`evaluate_into`)."""
 
 from __future__ import annotations
 
@@ -163,6 +165,172 @@ def run_episodes(
     )
 
 
+# --- common random numbers -----------------------------------------------------------------------
+
+#: The evaluation protocol a result was made by (its ``protocol["draws"]``): ``"crn-1"``, common
+#: random numbers (:func:`play_variants`). Results without the field were made before it (issue
+#: 47): one generator per learner, run through the variants in turn, episodes kept in the order
+#: they finished.
+PROTOCOL = "crn-1"
+
+
+def episode_seed(seed: int, episode: int) -> int:
+    """The start-state seed of episode ``episode`` of an evaluation seeded ``seed``, in whichever
+    arena and variant it is played."""
+    return int(np.random.SeedSequence([seed, 0, episode]).generate_state(1, np.uint64)[0])
+
+
+def exploration_draws(seed: int, episode: int, agent: int, steps: int, n_actions: int) -> tuple[np.ndarray, np.ndarray]:
+    """The exploration draws of agent number ``agent`` in episode ``episode`` of an evaluation
+    seeded ``seed``: per step, a uniform number (the agent explores where it is below ε) and the
+    random action it then takes. They depend on nothing else, so every variant, every run and
+    every kind of predator meets the same draws in the same episode."""
+    rng = np.random.default_rng([seed, 1, episode, agent])
+    return rng.random(steps), rng.integers(0, n_actions, steps)
+
+
+Variant = tuple[dict[str, Actor], dict[str, float]]
+"""One variant of an evaluation: the actor of each agent and the ε of those that explore."""
+
+
+def play_variants(
+    condition: str,
+    variants: list[Variant],
+    episodes: int,
+    *,
+    seed: int,
+    num_envs: int = 64,
+    backend: Backend = "pymunk",
+    recorder: Recorder | None = None,
+    check: Callable[[], None] = lambda: None,
+    task_options: Mapping[str, Any] | None = None,
+) -> list[Episodes]:
+    """Play episodes ``0 … episodes-1`` of every variant (the actors of each agent; a learning
+    agent named in the ε dict acts ε-greedily) in one batch of ``min(num_envs, episodes)``
+    arenas per variant, with common random numbers: episode ``e`` starts from the state
+    :func:`episode_seed` gives it and each exploring agent draws from :func:`exploration_draws` of
+    (``seed``, ``e``, agent), in whichever arena it is played. So episode ``e`` differs between
+    variants only where their actors do, and a variant's result does not depend on the others
+    played beside it. An arena that ends an episode starts the variant's next unplayed one; all
+    are played to their end (none is dropped for being long). Results come per variant in
+    episode order. A ``recorder`` (one variant only) receives every episode, numbered from 1,
+    with the hierarchical predators' Q-values and V(s); ``check()`` is called before every step."""
+    if recorder is not None and len(variants) != 1:
+        raise ValueError(f"a recorder records one variant, got {len(variants)}")
+    arenas = min(num_envs, episodes)
+    n, count = len(variants) * arenas, len(variants)
+    env = VectorPursuitEnv(n, condition, backend=backend, **dict(task_options or {}))
+    names, n_pred, steps = env.agents, env.n_agents - 1, env.config.max_steps
+    variant = np.arange(n) // arenas
+    playing = np.arange(n) % arenas  # each arena's episode now (``episodes`` or more: idle)
+    following = playing + arenas  # the episode it starts next (reserved: its seed is set ahead)
+    handed = np.full(count, 2 * arenas)  # per variant, the next episode not yet reserved
+    obs, _ = env.reset(seed=[episode_seed(seed, int(e)) for e in playing])
+    for row in np.flatnonzero(following < episodes):
+        env.reseed(int(row), episode_seed(seed, int(following[row])))
+    # per agent: rows grouped by actor (one forward pass each), and each row's ε (0: greedy)
+    groups: list[list[tuple[Actor, np.ndarray]]] = []
+    eps = np.zeros((n, env.n_agents))
+    for i, name in enumerate(names):
+        by_actor: dict[int, tuple[Actor, list[np.ndarray]]] = {}
+        for v, (actors, epsilons) in enumerate(variants):
+            rows = np.flatnonzero(variant == v)
+            by_actor.setdefault(id(actors[name]), (actors[name], []))[1].append(rows)
+            if isinstance(actors[name], LearningAgent) and name in epsilons:
+                eps[rows, i] = epsilons[name]
+        groups.append([(actor, np.concatenate(rows)) for actor, rows in by_actor.values()])
+    exploring = [i for i in range(env.n_agents) if eps[:, i].any()]
+    draws = {i: (np.ones((n, steps)), np.zeros((n, steps), dtype=np.int64)) for i in exploring}
+
+    def redraw(rows: np.ndarray) -> None:
+        for i in exploring:
+            n_actions = next(a.n_actions for a, _ in groups[i] if isinstance(a, LearningAgent))
+            for row in rows[(eps[rows, i] > 0) & (playing[rows] < episodes)]:
+                draws[i][0][row], draws[i][1][row] = exploration_draws(seed, int(playing[row]), i, steps, n_actions)
+
+    redraw(np.arange(n))
+    shapes = {
+        "returns": (env.n_agents,), "lengths": (), "captured": (), "chase_fraction": (n_pred,),
+        "distance": (env.n_agents,), "left_area": (env.n_agents,), "collisions": (env.n_agents,),
+        "contact_steps": (env.n_agents,),
+    }  # fmt: skip
+    kinds = {"lengths": np.int64, "captured": bool, "left_area": bool}
+    out = {k: np.zeros((count, episodes, *shape), dtype=kinds.get(k, float)) for k, shape in shapes.items()}
+    traces = None
+    if recorder is not None:
+        traces = EpisodeTraces(env.core.world.positions, steps, env.core.obstacles)
+    chase = np.zeros((n, n_pred))
+    travelled = np.zeros((n, env.n_agents))
+    touching = np.zeros((n, env.n_agents), dtype=bool)
+    collisions = np.zeros((n, env.n_agents))
+    contact = np.zeros((n, env.n_agents))
+    step = np.zeros(n, dtype=np.int64)
+    while (busy := playing < episodes).any():  # idle arenas step on with action 0, unheard
+        check()
+        actions = np.zeros((n, env.n_agents, 2), dtype=np.int64)
+        q_values = np.full((n, n_pred, 2), np.nan)
+        values = np.full((n, n_pred), np.nan)
+        for i in range(env.n_agents):
+            for actor, every in groups[i]:
+                rows = every[busy[every]]
+                if not len(rows):
+                    continue
+                seen = obs[rows, i]
+                if isinstance(actor, LearningAgent):
+                    choices = actor.learner.decisive_q(seen, actor.member).argmax(axis=-1)
+                    if i in exploring:
+                        at = step[rows]
+                        random = draws[i][0][rows, at] < eps[rows, i]
+                        choices = np.where(random, draws[i][1][rows, at], choices)
+                    chosen = actor.to_env(choices, seen)
+                    if traces is not None and isinstance(actor, HierarchicalPredator):
+                        _, _, q, values[rows, i] = actor.decide(seen, explore=False)
+                        q_values[rows, i] = actor.mode_q(q)
+                else:
+                    chosen = np.asarray(actor.act_batch(seen))
+                if chosen.ndim == 2:
+                    actions[rows, i] = chosen
+                else:
+                    actions[rows, i, 1] = chosen
+        before = env.core.world.positions.copy()
+        obs, rewards, _, truncated, info = env.step(actions)
+        travelled += np.hypot(*(info["positions"] - before).transpose(2, 0, 1))
+        chase += actions[:, :-1, 0]
+        collisions += info["touching_obstacle"] & ~touching
+        contact += info["touching_obstacle"]
+        touching = info["touching_obstacle"] & ~info["done"][:, None]
+        step += 1
+        if traces is not None:
+            traces.add_step(actions, rewards, info, q_values, values)
+        ended = np.flatnonzero(info["done"])
+        for row in ended:  # in arena order: which arena plays which episode is fixed by the seed
+            v, e = int(variant[row]), int(playing[row])
+            if e < episodes:
+                length = int(info["episode_length"][row])
+                out["returns"][v, e] = info["episode_return"][row]
+                out["lengths"][v, e] = length
+                out["captured"][v, e] = bool(info["captured"][row])
+                out["chase_fraction"][v, e] = chase[row] / length
+                out["distance"][v, e] = travelled[row]
+                out["left_area"][v, e] = info["left_area"][row]
+                out["collisions"][v, e] = collisions[row]
+                out["contact_steps"][v, e] = contact[row]
+            if traces is not None and recorder is not None:
+                trace = traces.finish(
+                    int(row), bool(truncated[row, 0]), env.core.world.positions[row], env.core.world.obstacles[row]
+                )
+                if e < episodes:
+                    recorder.log_episode(e + 1, trace)
+            playing[row], following[row] = following[row], int(handed[v])
+            handed[v] += 1
+            if following[row] < episodes:  # idle arenas keep their generator (no fresh draws)
+                env.reseed(int(row), episode_seed(seed, int(following[row])))
+        chase[ended] = travelled[ended] = collisions[ended] = contact[ended] = 0.0
+        step[ended] = 0
+        redraw(ended)
+    return [Episodes(**{k: x[v] for k, x in out.items()}) for v in range(count)]
+
+
 def standard_error(values: np.ndarray) -> float:
     """The standard error of the mean of ``values`` (0 for a single value)."""
     return float(values.std(ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
@@ -203,7 +371,10 @@ def evaluate_agents(
     """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
     learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
     cumulative reward as trained, then with it replaced by always-chase and by always-stalk,
-    the other agents fixed; every variant plays the same seeds. Also the capture rate, time to
+    the other agents fixed. Every variant plays the same episodes with common random numbers:
+    the same start states and the same exploration draws of the prey (:func:`play_variants`, all
+    variants in one batch of arenas; ``protocol["draws"]`` says :data:`PROTOCOL`); with
+    perturbed senses each variant is played alone (``"sequential"``). Also the capture rate, time to
     capture, distance travelled and fraction of steps in chase, as trained. The episodes as
     trained go into ``recorder``. With a learning prey, ``prey_check`` compares it, greedy,
     with ``FleeingPrey`` in its place against the same predators on the same seeds: return,
@@ -229,44 +400,56 @@ def evaluate_agents(
     kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
     epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
 
-    def play(actors: dict[str, Actor], rec: Recorder | None = None, greedy: bool = False) -> Episodes:
-        return run_episodes(
-            condition,
-            actors,
-            episodes,
-            seed=seed,
-            num_envs=num_envs,
-            epsilons={} if greedy else epsilons,
-            recorder=rec,
-            backend=backend,
-            check=check,
-            task_options=task_options,
-            perturbations=perturbations,
-        )
+    fleeing_prey = ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))
+    scripted_prey = isinstance(agents[prey], ScriptedAgent)  # FleeingPrey put in as a held-out opponent, say
+    checking = prey_epsilon is not None and prey_check and not scripted_prey  # a learning prey: greedy, and FleeingPrey
+    variants: list[Variant] = [(agents, epsilons)]
+    for name in predators:
+        for rule in (AlwaysChase, AlwaysStalk):
+            variants.append(({**agents, name: ScriptedAgent(name, rule(avoidance=avoidance))}, epsilons))
+    if checking:
+        variants += [(agents, {}), ({**agents, prey: fleeing_prey}, {})]
+    crn = perturbations is None or not perturbations.senses
+    if crn:  # every variant in one batch of arenas, with common random numbers
+        p = perturbations or Perturbations()
+        options = {**(task_options or {}), **p.task_options()}
 
-    trained = play(agents, recorder)
+        def batch(chosen: list[Variant], rec: Recorder | None = None) -> list[Episodes]:
+            return play_variants(
+                condition, chosen, episodes, seed=seed, num_envs=num_envs, backend=backend, recorder=rec,
+                check=check, task_options=options,
+            )  # fmt: skip
+
+        played = batch(variants[:1], recorder) + batch(variants[1:]) if recorder else batch(variants)
+    else:  # perturbed senses draw their noise across the arenas of one env: each variant played alone
+        played = [
+            run_episodes(
+                condition, actors, episodes, seed=seed, num_envs=num_envs, epsilons=eps,
+                recorder=recorder if k == 0 else None, backend=backend, check=check,
+                task_options=task_options, perturbations=perturbations,
+            )
+            for k, (actors, eps) in enumerate(variants)
+        ]  # fmt: skip
+    trained = played[0]
     panels = []
     for i, name in enumerate(predators):
-        chase = play({**agents, name: ScriptedAgent(name, AlwaysChase(avoidance=avoidance))})
-        stalk = play({**agents, name: ScriptedAgent(name, AlwaysStalk(avoidance=avoidance))})
-        variants = {"trained": trained, "always_chase": chase, "always_stalk": stalk}
+        chase, stalk = played[1 + 2 * i], played[2 + 2 * i]
+        variants_played = {"trained": trained, "always_chase": chase, "always_stalk": stalk}
         panels.append(
             {
                 "predator": name,
-                **{key: float(played.returns[:, i].mean()) for key, played in variants.items()},
-                "stderr": {key: standard_error(played.returns[:, i]) for key, played in variants.items()},
-                "episode_returns": {key: played.returns[:, i].round(6).tolist() for key, played in variants.items()},
+                **{key: float(e.returns[:, i].mean()) for key, e in variants_played.items()},
+                "stderr": {key: standard_error(e.returns[:, i]) for key, e in variants_played.items()},
+                "episode_returns": {key: e.returns[:, i].round(6).tolist() for key, e in variants_played.items()},
             }
         )
     captured = trained.captured
     checked = None
-    scripted_prey = isinstance(agents[prey], ScriptedAgent)  # FleeingPrey put in as a held-out opponent, say
-    if prey_epsilon is not None and prey_check and not scripted_prey:  # a learning prey: greedy, and FleeingPrey
-        greedy = play(agents, greedy=True)
-        fleeing = play({**agents, prey: ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))}, greedy=True)
+    if checking:
+        greedy, fleeing = played[-2:]
         checked = {
-            name: prey_outcomes(played, CONDITIONS[condition].max_steps)
-            for name, played in (("learned_greedy", greedy), ("fleeing_prey", fleeing))
+            name: prey_outcomes(e, CONDITIONS[condition].max_steps)
+            for name, e in (("learned_greedy", greedy), ("fleeing_prey", fleeing))
         }
     return {
         "condition": condition,
@@ -281,7 +464,7 @@ def evaluate_agents(
         "mean_return": {a: float(r) for a, r in zip(names, trained.returns.mean(axis=0), strict=True)},
         "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
         "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
-        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon},
+        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon, "draws": PROTOCOL if crn else "sequential"},
         "prey_check": checked,
         **({"perturbations": perturbations.changed} if perturbations is not None and perturbations.changed else {}),
         **(

@@ -47,7 +47,7 @@ class SweepPlan:
     conditions: tuple[str, ...]
     """Conditions, in order (``pursuit_bench.CONDITIONS``)."""
     seeds: int
-    """Seeds 0 … seeds − 1 for every condition and predator kind."""
+    """How many seeds, from ``first_seed`` on, for every condition and predator kind."""
     predators: tuple[str, ...] = ("hierarchical",)
     """Predator kinds to train (``hierarchical``, ``flat``, or a fixed baseline)."""
     agent: AgentConfig = QUICK
@@ -75,6 +75,9 @@ class SweepPlan:
     """Radius of every obstacle."""
     avoidance: bool = True
     """With obstacles: the predators' lower layer avoids them (``TrainConfig.avoidance``)."""
+    first_seed: int = 0
+    """The first seed: the sweep trains seeds ``first_seed … first_seed + seeds - 1`` (the rule
+    study's population trains from 1000, apart from the judged runs)."""
 
     def __post_init__(self) -> None:
         unknown = [c for c in self.conditions if c not in CONDITIONS]
@@ -113,7 +116,7 @@ class SweepPlan:
             )
             for predator in self.predators
             for condition in self.conditions
-            for seed in range(self.seeds)
+            for seed in range(self.first_seed, self.first_seed + self.seeds)
         }
 
     def to_dict(self) -> dict[str, Any]:

@@ -1,0 +1,256 @@
+"""The rule study's driver (issue 47; REPRODUCTION.md, "Protocol of the rule study"; PLAN.md beside
+this file): trains each condition's population, writes it in the population format, then the
+judged runs of both kinds, cheapest conditions first, and evaluates each against its condition's
+population at every budget, writing its compact result under ``results/rule-study/runs/``; the
+seed rule adds judged seeds where a condition's runs split.
+
+    nohup python studies/rule-value/run.py --workers 2 &      # start, or resume: the same command
+    kill -TERM "$(cat sweeps/rule-study/driver.pid)"          # stop cleanly (checkpoints, then exits 143)
+    tail -f sweeps/rule-study/progress.log                    # progress
+
+Every run is a sweep's run folder under ``--work`` (training resumes exactly from its last
+checkpoint); a judged run's evaluation is written whole when it ends, and a rerun skips what is
+written. The study refuses to go on with package code other than that it started with (a run
+trained by another build is never mixed in): ``--work``/study.json holds the code's fingerprint.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import hashlib
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def log(work: Path, line: str) -> None:
+    stamped = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M:%S} {line}"
+    print(stamped, flush=True)
+    with (work / "progress.log").open("a") as file:
+        file.write(stamped + "\n")
+
+
+def build() -> dict[str, str]:
+    """The code that trains and evaluates: the commit, and a fingerprint of the package's tracked
+    Python files (unchanged by committing results or the population's weights). Refuses
+    uncommitted changes to the package's code."""
+    dirty = subprocess.run(
+        ["git", "status", "--porcelain", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout
+    changed = [line for line in dirty.splitlines() if line.endswith(".py")]
+    if changed:
+        raise SystemExit(f"the package has uncommitted code changes ({changed[0].strip()} …): commit them first")
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    listed = subprocess.run(
+        ["git", "ls-files", "-s", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout
+    code = "\n".join(line for line in listed.splitlines() if line.endswith(".py"))
+    return {"commit": commit.strip(), "code": hashlib.sha256(code.encode()).hexdigest()[:16]}
+
+
+def check_build(work: Path, current: dict[str, str]) -> None:
+    path = work / "study.json"
+    if path.exists():
+        started = json.loads(path.read_text())
+        if started["code"] != current["code"]:
+            raise SystemExit(
+                f"{path}: the study started with other code (commit {started['commit'][:10]}, fingerprint "
+                f"{started['code']}); now {current['commit'][:10]} ({current['code']}). Its runs are not mixed: "
+                "check out that commit's package to go on, or start the study again in a new --work"
+            )
+    else:
+        path.write_text(json.dumps(current, indent=2) + "\n")
+
+
+def plan_for(kind: str, conditions: list[str], first: int, seeds: int, args: Any, keep: tuple[int, ...]) -> Any:
+    from pursuit_bench.agents.config import PRESETS
+    from pursuit_bench.training.sweep import SweepPlan
+
+    return SweepPlan(
+        conditions=tuple(conditions),
+        seeds=seeds,
+        first_seed=first,
+        predators=(kind,) if kind != "both" else ("hierarchical", "flat"),
+        agent=PRESETS[args.preset].replace(episodes=args.episodes),
+        episodes=args.episodes,
+        eval_episodes=1,  # the sweep's own evaluation (each run against its own prey) is not read
+        num_envs=args.num_envs,
+        checkpoint_every=args.checkpoint_every,
+        preset=args.preset,
+        keep_checkpoints=keep,
+    )
+
+
+def sweep(folder: Path, plan: Any, args: Any, stop: list[bool]) -> bool:
+    from pursuit_bench.training.sweep import open_sweep, run_sweep
+
+    note = open_sweep(folder, plan)
+    if note:
+        log(args.work, note)
+
+    def heard(kind: str, name: str, value: Any) -> None:
+        if kind == "done":
+            log(args.work, f"trained {name}")
+
+    return run_sweep(folder, plan, workers=args.workers, record=False, on_message=heard, should_stop=lambda: stop[0])
+
+
+def population(args: Any, stop: list[bool], conditions: list[str], current: dict[str, str]) -> bool:
+    from pursuit_bench.study import rule_study
+    from pursuit_bench.training import runs
+
+    for kind in rule_study.KINDS:
+        seeds = rule_study.population_seeds(kind)
+        folder = args.work / f"population-{kind}"
+        log(args.work, f"population: {kind} prey, seeds {seeds.start}–{seeds.stop - 1}, {len(conditions)} conditions")
+        if not sweep(folder, plan_for(kind, conditions, seeds.start, len(seeds), args, ()), args, stop):
+            return False
+    for condition in conditions:
+        if (args.population / condition / "population.json").exists():
+            continue
+        prey, trained = {}, {}
+        for member in rule_study.members(condition):
+            if member["policy"] is not None:
+                continue
+            name = f"{condition}-{member['kind']}-seed{member['seed']}"
+            config, agents, about = runs.described(args.work / f"population-{member['kind']}" / "runs" / name)
+            prey[member["name"]] = (agents["prey_0"], config)
+            trained[member["name"]] = {
+                "preset": args.preset,
+                "episodes": int(about.get("trained_episodes", config.episodes)),
+                "predator_kind": member["kind"],
+                "build": current["commit"],
+            }
+        rule_study.write_population(args.population, condition, prey, trained)
+        log(args.work, f"population of {condition} written to {args.population / condition}")
+    return True
+
+
+def evaluate(
+    folder: str, population: str, out: str, name: str, condition: str, kind: str, seed: int, build: str, trial: Any
+) -> dict[str, Any]:
+    """One judged run against its population, its compact result written (a worker's job)."""
+    import torch
+
+    from pursuit_bench.study import rule_study
+
+    torch.set_num_threads(1)
+    options = {} if trial is None else {"episodes": trial[0], "budgets": tuple(trial[1])}
+    result = rule_study.evaluate_run(Path(folder), Path(population), **options)
+    rule_study.write_run(Path(out), name, condition, kind, seed, build, result)
+    return {"written": f"{name}.json.gz"}
+
+
+def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str, str]) -> bool:
+    from pursuit_bench.study import rule_study
+    from pursuit_bench.study.jobs import run_jobs
+
+    out = args.results / "runs"
+    out.mkdir(parents=True, exist_ok=True)
+    marker = args.results / "rule-study.json"  # what `pursuit-bench report` knows the folder by
+    if not marker.exists():
+        about = {
+            "format": rule_study.FORMAT,
+            "protocol": "REPRODUCTION.md, Protocol of the rule study",
+            "population": rule_study.POPULATION,
+            "command": "python studies/rule-value/run.py " + " ".join(sys.argv[1:]),
+        }
+        marker.write_text(json.dumps(about, indent=2) + "\n")
+    budgets = list(rule_study.BUDGETS) if args.budgets is None else [int(b) for b in args.budgets.split(",")]
+    keep = tuple(budgets[:-1])
+    for condition in conditions:
+        first = 0
+        while True:
+            done = [r for r in rule_study.read_runs(out) if r["condition"] == condition]
+            wanted = rule_study.seeds_wanted(done)
+            if first >= wanted:
+                log(args.work, f"{condition}: {wanted} judged runs a kind, done")
+                break
+            step = min(rule_study.STEP_RUNS if first else rule_study.FIRST_RUNS, wanted - first)
+            rule_study.check_design({k: list(range(wanted)) for k in rule_study.KINDS}, rule_study.members(condition))
+            folder = args.work / f"judged-{condition}-from{first}"
+            log(args.work, f"{condition}: judged seeds {first}–{first + step - 1}, both kinds")
+            if not sweep(folder, plan_for("both", [condition], first, step, args, keep), args, stop):
+                return False
+            jobs = []
+            for kind in rule_study.KINDS:
+                for seed in range(first, first + step):
+                    name = f"{condition}-{kind}-seed{seed}"
+                    if (out / f"{name}.json.gz").exists():
+                        continue
+                    where = str(folder / "runs" / name)
+                    pop = str(args.population / condition)
+                    trial = None if args.budgets is None else (args.eval_episodes, budgets)
+                    jobs.append((name, (where, pop, str(out), name, condition, kind, seed, current["commit"], trial)))
+            if jobs:
+                log(args.work, f"{condition}: evaluating {len(jobs)} runs against the population")
+                run_jobs(
+                    jobs,
+                    evaluate,
+                    args.work / "evaluation-parts",
+                    {"build": current["code"]},
+                    workers=args.workers,
+                    progress=lambda n, total, c=condition: log(args.work, f"{c}: {n} of {total} evaluations"),
+                )
+            if stop[0]:
+                return False
+            first += step
+    return True
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--work", type=Path, default=ROOT / "sweeps" / "rule-study", help="Run folders, logs.")
+    parser.add_argument("--results", type=Path, default=ROOT / "results" / "rule-study")
+    parser.add_argument(
+        "--population", type=Path, default=ROOT / "pursuit_bench" / "pretrained" / "populations" / "rule-study"
+    )
+    parser.add_argument("--conditions", default="all", help="'all' or a comma-separated list.")
+    parser.add_argument("--preset", default="reproduction", help="(only for trying the driver: quick)")
+    parser.add_argument("--episodes", type=int, default=15000, help="(only for trying the driver)")
+    parser.add_argument("--num-envs", type=int, default=32)
+    parser.add_argument("--checkpoint-every", type=int, default=1000)
+    parser.add_argument("--skip-build-check", action="store_true", help="(tests only)")
+    parser.add_argument("--budgets", default=None, help="(tests only) e.g. 4,8; the last is --episodes")
+    parser.add_argument("--eval-episodes", type=int, default=None, help="(tests only, with --budgets)")
+    args = parser.parse_args()
+    from pursuit_bench.env.conditions import CONDITIONS
+    from pursuit_bench.study import rule_study
+
+    chosen = list(CONDITIONS) if args.conditions == "all" else args.conditions.split(",")
+    if unknown := [c for c in chosen if c not in CONDITIONS]:
+        print(f"--conditions: unknown {unknown}; expected some of {', '.join(CONDITIONS)}", file=sys.stderr)
+        return 2
+    conditions = rule_study.order(chosen)
+    last = rule_study.BUDGETS[-1] if args.budgets is None else int(args.budgets.split(",")[-1])
+    if args.episodes != last:
+        print(f"--episodes {args.episodes}: the study's last budget is {last}", file=sys.stderr)
+        return 2
+    args.work.mkdir(parents=True, exist_ok=True)
+    current = {"commit": "test", "code": "test"} if args.skip_build_check else build()
+    check_build(args.work, current)
+    (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
+    stop = [False]
+
+    def asked(signum: int, frame: Any) -> None:
+        stop[0] = True
+        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+
+    signal.signal(signal.SIGTERM, asked)
+    signal.signal(signal.SIGINT, asked)
+    log(args.work, f"rule study: {', '.join(conditions)}; commit {current['commit'][:10]}, code {current['code']}")
+    finished = population(args, stop, conditions, current) and judged(args, stop, conditions, current)
+    log(args.work, "finished" if finished else "stopped: rerun the same command to resume")
+    return 0 if finished else 143
+
+
+if __name__ == "__main__":
+    sys.exit(main())
