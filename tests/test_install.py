@@ -22,7 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 #: What a build needs of the checkout (pyproject.toml's readme, license-files and packages).
 SOURCES = ("pyproject.toml", "README.md", "LICENSE", "pursuit_bench")
 
-pytestmark = pytest.mark.slow
+#: Minutes of installing (the training stack from PyPI): slow, and selectable on its own (-m install).
+pytestmark = [pytest.mark.slow, pytest.mark.install]
 
 
 def _clean_env() -> dict[str, str]:
@@ -117,7 +118,10 @@ print(" ".join(sorted({name.split(".")[0] for name in sys.modules})))
 """
 
 
-def test_the_environment_alone_installs_and_passes_pettingzoo_s_api_test(wheel: Path, venv: Path) -> None:
+def test_the_wheel_installs_the_environment_alone_then_the_training_stack(wheel: Path, venv: Path) -> None:
+    """One venv, as a user grows it: the environment alone (PettingZoo's API test, the command
+    line's one line for each missing extra), then the ``train`` extra (the shipped agents evaluated
+    outside the repository). One venv, not two: the training stack takes minutes to install."""
     _pip(venv, wheel, "pytest")  # pytest: pettingzoo.test imports it
     work = venv.parents[2]
     listed = _ok(_run(venv, "-m", "pip", "list", "--format=freeze", cwd=work)).lower()
@@ -141,21 +145,12 @@ def test_the_environment_alone_installs_and_passes_pettingzoo_s_api_test(wheel: 
     ), result.stderr
     assert not (work / "run").exists()
 
-
-def test_the_wheel_with_the_train_extra_evaluates_the_shipped_agents_outside_the_repository(
-    wheel: Path, venv: Path
-) -> None:
     _pip(venv, "torch==2.13.0")  # the CPU build, from the machine's wheels, before the extra pulls another
     _pip(venv, f"{wheel}[train]")
-    work = venv.parents[2]
-    result = _run(venv.parent / "pursuit-bench", "eval", "--pretrained", "1p-high", "--episodes", "20", cwd=work)
+    result = _run(script, "eval", "--pretrained", "1p-high", "--episodes", "20", cwd=work)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
-    assert (
-        "predator_0: hierarchical" in result.stdout and (work / "runs" / "pretrained-1p-high" / "eval.json").is_file()
-    )
-    output = _ok(
-        _run(venv, "-c", "import pursuit_bench; print(pursuit_bench.parallel_env().possible_agents)", cwd=work)
-    )
-    assert "prey_0" in output
-    location = _ok(_run(venv, "-c", "import pursuit_bench; print(pursuit_bench.__file__)", cwd=work))
-    assert location.startswith(str(venv.parents[1])), location
+    assert "predator_0: hierarchical" in result.stdout
+    assert (work / "runs" / "pretrained-1p-high" / "eval.json").is_file()
+    agents = "import pursuit_bench; print(pursuit_bench.__file__, pursuit_bench.parallel_env().possible_agents)"
+    output = _ok(_run(venv, "-c", agents, cwd=work))
+    assert output.startswith(str(venv.parents[1])) and "prey_0" in output, output
