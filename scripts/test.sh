@@ -2,7 +2,9 @@
 # The test suite as CI runs it: install, lint, type-check, then pytest on both cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install.sh test,docs  # docs: the site's tools and Chromium (tests/test_docs_site.py)
+# train,test,docs: the training stack, the test tools, the site's tools; and Chromium for the site's browser
+# checks where it can be installed (install.sh says what it did; without it those checks are skipped, saying why)
+bash scripts/install.sh train,test,docs
 .venv/bin/ruff check .
 .venv/bin/ruff format --check .
 .venv/bin/mypy

@@ -1,6 +1,7 @@
 """The command line, run for real on tiny budgets."""
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -54,6 +55,12 @@ def test_train_then_eval_writes_the_run_folder(tmp_path: Path) -> None:
     assert 0.0 <= result["capture_rate"] <= 1.0 and set(result["chase_fraction"]) == {"predator_0", "predator_1"}
     assert (out / "eval.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and (out / "eval.png").stat().st_size > 5000
     assert (out / "eval.rrd").stat().st_size > 0
+    # the prey's outcomes name all four ways an episode ends and add up; the capture rate says its protocol
+    prey_line = next(line for line in output.splitlines() if line.startswith("prey_0"))
+    for side in prey_line.split("; "):
+        shares = [float(share) for share in re.findall(r"(?:caught|wall|limit) ([\d.]+)%", side)]
+        assert len(shares) == 4 and abs(sum(shares) - 100) < 0.25, side
+    assert "capture rate" in output and "the paper's protocol: the prey ε-greedy with ε = 0.1" in output
 
 
 def test_same_seed_same_eval(tmp_path: Path) -> None:
@@ -78,13 +85,16 @@ def test_same_seed_same_eval(tmp_path: Path) -> None:
         (["view", "missing.rrd"], "missing.rrd: no such recording"),
         (["eval", "--pretrained", "1p-high", "--out", "a-file"], "--out a-file: exists and is not a folder"),
         (["analyze", "--pretrained", "1p-high", "--out", "a-file"], "--out a-file: exists and is not a folder"),
+        (["train", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
+        (["eval", "--pretrained", "1p-high", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
+        (["sweep", "--out", "a-file/sub/deeper"], "--out a-file/sub/deeper: a-file is a file"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: list[str], message: str) -> None:
     monkeypatch.chdir(tmp_path)
     (tmp_path / "a-file").write_text("not a folder")
     code, output = run_cli(*args)
-    assert code == 2 and message in output and "Traceback" not in output, output
+    assert code == 2 and message in output and len(output.strip().splitlines()) == 1, output
 
 
 def test_view_without_a_display_says_what_to_do(tmp_path: Path, monkeypatch) -> None:
@@ -93,7 +103,8 @@ def test_view_without_a_display_says_what_to_do(tmp_path: Path, monkeypatch) -> 
     recording = tmp_path / "x.rrd"
     recording.write_bytes(b"RRF2")
     code, output = run_cli("view", str(recording))
-    assert code == 1 and "no display" in output and "rerun --web-viewer" in output and "Traceback" not in output
+    assert code == 1 and "no display" in output and "Traceback" not in output
+    assert "rerun --web-viewer --bind 127.0.0.1 " in output
 
 
 def test_bad_run_folders(tmp_path: Path) -> None:

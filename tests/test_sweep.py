@@ -212,3 +212,5 @@ def test_a_stopped_sweep_says_what_it_saved(tmp_path: Path, processes) -> None:
     assert process.returncode == 143, stderr
     with_checkpoint = sum((out / "runs" / name / "checkpoint.pt").exists() for name in NAMES)
     assert f"{with_checkpoint} of 4 runs with a checkpoint" in stderr, stderr
+    others = {0: "rerun the same command", 1: "the other one starts", 2: "the other 2 start", 3: "the other 3 start"}
+    assert others.get(4 - with_checkpoint, "the other 4 start") in stderr and "the others" not in stderr, stderr

@@ -161,7 +161,7 @@ def _held_out(
     else:
         other_config, other, _ = runs.described(Path(opponents))
     mine = "the shipped agents" if "pretrained" in about else "the run"
-    check_opponents(config, other_config, mine=mine, theirs=opponents)
+    check_opponents(config, other_config, mine=mine, theirs=opponents, retrainable="pretrained" not in about)
     prey_side = evaluate_agents(
         config.condition,
         {**{k: v for k, v in other.items() if k != "prey_0"}, "prey_0": prey},
@@ -179,10 +179,12 @@ def _held_out(
 
 
 def _outcomes(check: dict[str, float]) -> str:
-    """A prey's check in words: its return and how its episodes ended."""
+    """A prey's check in words: its return and how its episodes ended, the four ways that add to
+    one (``prey_outcomes``: a predator's running into a wall ends the episode too)."""
+    rest = max(0.0, 1.0 - check["captured"] - check["left_area"] - check["survived"])
     return (
-        f"return {check['return']:+.3f}, caught {check['captured']:.0%}, ran into a wall {check['left_area']:.0%}, "
-        f"survived to the time limit {check['survived']:.0%}"
+        f"return {check['return']:+.3f}, caught {check['captured']:.1%}, ran into a wall {check['left_area']:.1%}, "
+        f"a predator ran into a wall {rest:.1%}, survived to the time limit {check['survived']:.1%}"
     )
 
 
@@ -270,6 +272,9 @@ def _evaluate_run(
         click.echo(f"the evaluated agents' own prey against {held_out['prey']}'s predators, greedy: {_outcomes(check)}")
     if result.get("perturbations"):
         click.echo("perturbed: " + ", ".join(f"{k}={v:g}" for k, v in result["perturbations"].items()))
-    click.echo(f"capture rate {result['capture_rate']:.1%}; results in {paths['json']} and {paths['png']}")
+    protocol, epsilon = "", result.get("protocol", {}).get("prey_epsilon")
+    if result.get("prey_check") is not None and epsilon is not None:  # beside a greedy prey's outcomes
+        protocol = f" (the paper's protocol: the prey ε-greedy with ε = {epsilon:g}, not greedy as above)"
+    click.echo(f"capture rate {result['capture_rate']:.1%}{protocol}; results in {paths['json']} and {paths['png']}")
     if settings["record"]:
         click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")

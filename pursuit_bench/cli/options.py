@@ -233,13 +233,22 @@ def run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | None
         raise click.UsageError("--out goes with --pretrained; a RUN's results go into the RUN")
     if pretrained is not None:
         folder = out if out is not None else Path("runs") / f"pretrained-{pretrained}"
-        if folder.exists() and not folder.is_dir():
-            raise click.UsageError(f"--out {folder}: exists and is not a folder")
+        check_out_folder(folder)
         if (folder / "config.json").exists():
             raise click.UsageError(f"--out {folder} holds a training run, whose results are its own: choose another")
         return folder
     assert run is not None
     return run
+
+
+def check_out_folder(out: Path) -> None:
+    """BadInput unless ``--out`` is a folder or can be made one: no part of its path is a file."""
+    for part in (out, *out.parents):
+        if part.exists():
+            if not part.is_dir():
+                what = "exists and is not a folder" if part == out else f"{part} is a file"
+                raise BadInput(f"--out {out}: {what}")
+            return
 
 
 def check_run_folder(folder: Path) -> None:

@@ -16,7 +16,7 @@ import click
 
 class Progress:
     """``update(done)`` as episodes finish; ``describe()`` gives the figures to show; ``eta``
-    adds the time left at the rate so far to each log line."""
+    adds the time left at the recent rate to each log line."""
 
     def __init__(
         self,
@@ -42,21 +42,45 @@ class Progress:
         self._done = done
         self._start, self._start_done = time.monotonic(), done
         self._last_time, self._last_done = self._start, done
-        self._history: collections.deque[tuple[float, int]] = collections.deque([(self._start, done)])
+        #: (time, episodes done) from the first episode finished on: the time before it (imports,
+        #: compiling the kernels) is no episode's. Thinned to about 50 points a window; two windows kept.
+        self._points: collections.deque[tuple[float, int]] = collections.deque()
 
-    #: No ETA before this share of what is left at the start is done: episodes grow longer as the
-    #: agents learn (a prey that survives), so the first episodes' rate promises far too much.
+    #: No ETA before this share of what is left at the start is done; the rate is that of the
+    #: most recent such share of the work (the window).
     ETA_AFTER = 0.1
+    #: The ETA is a floor (``≥``) when the window's rate is below this share of the window before's.
+    SLOWING = 0.9
+
+    @property
+    def _window(self) -> float:
+        return max(self.ETA_AFTER * (self.total - self._start_done), 1.0)
+
+    def _rate_to(self, end: tuple[float, int]) -> tuple[float, tuple[float, int]] | None:
+        """Episodes a second over the window that ends at ``end`` (from the last point a window or
+        more before it, else the first point), and where that window starts; None without one."""
+        t1, d1 = end
+        start = next((p for p in reversed(self._points) if p[1] <= d1 - self._window), self._points[0])
+        if start[1] >= d1:
+            return None
+        return (d1 - start[1]) / max(t1 - start[0], 1e-9), start
 
     def _eta(self) -> str:
-        """The time left at the rate of the most recent tenth of the work (not the average since
-        the start, which early short episodes flatter), or when one will be given."""
-        work = self.total - self._start_done
-        if self._done - self._start_done < self.ETA_AFTER * work:
+        """What is left at the rate of the most recent tenth of the work (not the average since the
+        start, which the start-up and the early short episodes distort), marked ``≥`` while the rate
+        is falling (episodes lengthen as the agents learn: the time left will be longer); or when
+        one will be given."""
+        if self._done - self._start_done < self.ETA_AFTER * (self.total - self._start_done):
             return f"after {self.ETA_AFTER:.0%}"
-        (t0, d0), (now, _) = self._history[0], self._history[-1]  # the window's start (see _line)
-        rate = (self._done - d0) / max(now - t0, 1e-9)
-        return time.strftime("%H:%M:%S", time.gmtime((self.total - self._done) / rate)) if rate > 0 else "?"
+        recent = self._rate_to(self._points[-1]) if self._points else None
+        if recent is None or recent[0] <= 0:
+            return "?"
+        rate, start = recent
+        left = time.strftime("%H:%M:%S", time.gmtime((self.total - self._done) / rate))
+        before = self._rate_to(start)
+        if before is not None and rate < self.SLOWING * before[0]:
+            return f"≥ {left} (episodes lengthening)"
+        return left
 
     def update(self, done: int) -> None:
         if self._bar is not None:
@@ -65,15 +89,15 @@ class Progress:
             return
         self._done = done
         now = time.monotonic()
+        if self.eta and (not self._points or done - self._points[-1][1] >= self._window / 50):
+            self._points.append((now, done))
+            while len(self._points) > 2 and done - self._points[1][1] >= 2 * self._window:
+                self._points.popleft()  # kept: two windows back, and the point before
         if done - self._last_done >= self.every_episodes or now - self._last_time >= self.every_seconds:
             self._line(now)
 
     def _line(self, now: float) -> None:
         rate = (self._done - self._start_done) / max(now - self._start, 1e-9)
-        self._history.append((now, self._done))
-        window = self.ETA_AFTER * (self.total - self._start_done)
-        while len(self._history) > 2 and self._done - self._history[0][1] > window:
-            self._history.popleft()  # kept: the lines within the last tenth of the work, or the one before
         eta = ""
         if self.eta:  # by episodes: the ETA of one run (a sweep's describe() gives its own)
             eta = f" | ETA {self._eta()}"

@@ -15,6 +15,7 @@ from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS
 from pursuit_bench.cli.options import (
     PREDATOR_KINDS,
     BadInput,
+    check_out_folder,
     episode_counts,
     in_option_words,
     names,
@@ -41,8 +42,8 @@ from pursuit_bench.io.signals import SignalCatcher, Stopped
     "--predators",
     default="hierarchical",
     show_default=True,
-    help="Comma-separated predator kinds to train: hierarchical, flat (the ablation), residual (the rule "
-    "corrected), always_chase, always_stalk.",
+    help="'all' or comma-separated predator kinds to train: hierarchical, flat (the ablation), residual (the "
+    "rule corrected), always_chase, always_stalk.",
 )
 @click.option(
     "--eval-episodes",
@@ -112,6 +113,7 @@ def sweep(
     chosen = names(conditions, list(CONDITIONS), "conditions")  # refused before the heavy imports
     kinds = names(predators, PREDATOR_KINDS, "predators")
     kept = episode_counts(keep_checkpoints)
+    check_out_folder(out)
 
     from pursuit_bench.study.plots import reward_bars_png
     from pursuit_bench.training import sweep as sweeps
@@ -193,10 +195,13 @@ def sweep(
         stopped = Stopped(signals.signum)
         saved = {name: sweeps.run_status(out / "runs" / name, c, plan.keep_checkpoints) for name, c in configs.items()}
         started = {name: n for name, (n, _) in saved.items() if n > 0}
+        others = len(configs) - len(started)
+        fresh = f"the other {others} start from the beginning; " if others > 1 else ""
+        fresh = "the other one starts from the beginning; " if others == 1 else fresh
         click.echo(
             f"\n{stopped}: sweep stopped. On disk: {len(started)} of {len(configs)} runs with a checkpoint "
             f"({sum(started.values())} episodes in all), {sum(done for _, done in saved.values())} finished; "
-            "the others start from the beginning. Rerun the same command to go on.",
+            f"{fresh}rerun the same command to go on.",
             err=True,
         )
         sys.exit(stopped.exit_code)

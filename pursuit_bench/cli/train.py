@@ -19,6 +19,7 @@ from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS
 from pursuit_bench.cli.options import (
     PREDATOR_KINDS,
     BadInput,
+    check_out_folder,
     in_option_words,
     recording_every,
     threads_option,
@@ -202,8 +203,7 @@ def train(
     out = out or Path("runs") / (
         f"{condition}-obstacles{obstacles}-seed{seed}" if obstacles else f"{condition}-seed{seed}"
     )
-    if out.exists() and not out.is_dir():
-        raise BadInput(f"--out {out}: exists and is not a folder")
+    check_out_folder(out)
     note = None
     if resume:
         config, settings, note = _resumed_config(ctx, out, episodes)

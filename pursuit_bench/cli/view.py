@@ -4,6 +4,7 @@ the paper's ten conditions.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -50,9 +51,12 @@ def view(path: Path) -> None:
         shown = " ".join(str(f) for f in files)
         raise click.ClickException(
             f"no display here to open the viewer on. Copy {shown} to a machine with one and run "
-            f"`rerun {shown}`, or serve the web viewer from here: `rerun --web-viewer {shown}` "
-            "and open the address it prints in a browser"
+            f"`rerun {shown}`, or serve the web viewer from here to this machine only: "
+            f"`rerun --web-viewer --bind 127.0.0.1 {shown}` and open the address it prints in a browser "
+            "(from another machine, through `ssh -L 9090:127.0.0.1:9090 HOST`)"
         )
     rerun = shutil.which("rerun")
+    if rerun is None and importlib.util.find_spec("rerun") is None:
+        raise ModuleNotFoundError("Rerun is not installed", name="rerun")  # cli/entry.py names its extra
     args = [rerun] if rerun else [sys.executable, "-m", "rerun"]
     raise SystemExit(subprocess.call([*args, *map(str, files)]))

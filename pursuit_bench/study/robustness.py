@@ -70,7 +70,7 @@ def _evaluate(
     config, agents, _ = _described(predators_from)
     if prey_from != predators_from:
         other_config, other, _ = _described(prey_from)
-        check_opponents(config, other_config)
+        check_opponents(config, other_config, retrainable=not isinstance(predators_from, str))
         agents = {**agents, "prey_0": other["prey_0"]}
     if perturbations.obstacles and config.task_options.get("obstacles"):
         raise ValueError("obstacles=N: for agents trained without obstacles")
@@ -95,42 +95,50 @@ def _described(source: Path | str) -> tuple[Any, dict[str, Any], dict[str, Any]]
     return runs.described(source)
 
 
-def check_opponents(config: Any, other: Any, mine: str = "the predators' run", theirs: str = "the prey's run") -> None:
+def check_opponents(
+    config: Any, other: Any, mine: str = "the predators' run", theirs: str = "the prey's run", retrainable: bool = True
+) -> None:
     """ValueError unless agents trained by ``config`` and ``other`` can meet: the same number of
     predators and the same observation (wall features, obstacles); the message names what
-    differs and the training options that would match ``theirs``."""
+    differs and the training options that would match ``theirs`` (``retrainable``), or, for
+    agents a user cannot train again (the shipped ones), the opponents that would match ``mine``."""
     ours, others = CONDITIONS[config.condition], CONDITIONS[other.condition]
     if ours.n_predators != others.n_predators:
+        hint = (
+            f"train {mine} with --condition {other.condition} to meet {theirs}"
+            if retrainable
+            else f"choose opponents with {ours.n_predators} predator(s), e.g. a run of --condition {config.condition}"
+        )
         raise ValueError(
             f"opponents: {mine} ({config.condition}) has {ours.n_predators} predators and {theirs} "
-            f"({other.condition}) {others.n_predators}; the prey's observation differs (train {mine} with "
-            f"--condition {other.condition} to meet {theirs})"
+            f"({other.condition}) {others.n_predators}; the prey's observation differs ({hint})"
         )
+    target = other if retrainable else config  # whose options the other side would need
     differ = []
     if config.agent.wall_features != other.agent.wall_features:
-        flag = "--wall-features" if other.agent.wall_features else "--no-wall-features"
+        flag = "--wall-features" if target.agent.wall_features else "--no-wall-features"
         on = {True: "on", False: "off"}
         differ.append(
             (
                 f"wall features {on[config.agent.wall_features]} in {mine}, {on[other.agent.wall_features]} in "
                 f"{theirs}",
-                flag + (" (the reproduction preset's)" if other.agent.wall_features else ""),
+                flag + (" (the reproduction preset's)" if target.agent.wall_features else ""),
             )
         )
     if config.task_options != other.task_options:
-        wanted = other.task_options.get("obstacles", 0)
+        wanted = target.task_options.get("obstacles", 0)
         differ.append(
             (
                 f"obstacles {config.task_options or 'none'} in {mine}, {other.task_options or 'none'} in {theirs}",
                 f"--obstacles {wanted}"
-                + (f" --obstacle-radius {other.task_options['obstacle_radius']:g}" if wanted else ""),
+                + (f" --obstacle-radius {target.task_options['obstacle_radius']:g}" if wanted else ""),
             )
         )
     if differ:
+        options = " ".join(option for _, option in differ)
+        hint = f"train with {options} to meet {theirs}" if retrainable else f"choose opponents trained with {options}"
         raise ValueError(
-            "opponents: the agents observe differently: "
-            + "; ".join(what for what, _ in differ)
-            + f" (train with {' '.join(option for _, option in differ)} to meet {theirs})"
+            "opponents: the agents observe differently: " + "; ".join(what for what, _ in differ) + f" ({hint})"
         )
 
 

@@ -1,0 +1,53 @@
+"""The ``pursuit-bench`` script's entry point: the command line with, when a module of an extra is
+missing, one line that names the extra to install instead of a traceback.
+
+``pip install pursuit-bench`` installs the environment alone (numpy, pymunk, Gymnasium,
+PettingZoo, numba); the commands need the ``train`` extra (torch, Rerun, click, …) and
+``sweep --backend ray`` the ``ray`` extra (pyproject.toml). This module imports nothing but the
+standard library before it has caught what is missing: click itself is one of them.
+"""
+
+from __future__ import annotations
+
+import sys
+
+#: Each module the commands import that the environment's install lacks: (the distribution
+#: that holds it, the extra that installs it). tests/test_install.py checks it against pyproject.toml.
+EXTRA_OF: dict[str, tuple[str, str]] = {
+    "click": ("click", "train"),
+    "torch": ("torch", "train"),
+    "rerun": ("rerun-sdk", "train"),
+    "matplotlib": ("matplotlib", "train"),
+    "scipy": ("scipy", "train"),
+    "sklearn": ("scikit-learn", "train"),
+    "safetensors": ("safetensors", "train"),
+    "threadpoolctl": ("threadpoolctl", "train"),
+    "ray": ("ray", "ray"),
+}
+
+
+def missing_extra(error: ModuleNotFoundError) -> str | None:
+    """The one-line message for a module an extra installs, or None for any other module."""
+    module = (error.name or "").partition(".")[0]
+    if module not in EXTRA_OF:
+        return None
+    distribution, extra = EXTRA_OF[module]
+    install = f"pip install 'pursuit-bench[{extra}]'"
+    if module == "click":  # the command line itself (an install of the environment alone)
+        return f"Error: pursuit-bench's command line needs its '{extra}' extra: {install}"
+    command = " ".join(["pursuit-bench", *(a for a in sys.argv[1:2] if not a.startswith("-"))])
+    return f"Error: {command} needs {distribution}, which pursuit-bench's '{extra}' extra installs: {install}"
+
+
+def main() -> None:
+    """Run the command line; a missing extra's module ends it with one line and status 1."""
+    try:
+        from pursuit_bench.cli.main import main as command_line
+
+        command_line()
+    except ModuleNotFoundError as error:
+        message = missing_extra(error)
+        if message is None:
+            raise
+        print(message, file=sys.stderr)
+        sys.exit(1)
