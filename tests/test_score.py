@@ -89,11 +89,63 @@ def test_a_population_that_breaks_the_format_is_refused(tmp_path: Path) -> None:
         populations.load("other", "1p-high", folder=tmp_path)
 
 
+def test_a_population_written_as_the_rule_study_writes_it_is_read_as_it_stands(tmp_path: Path) -> None:
+    """OWNERS.md's format: members exported by ``pretrained.export`` into ``<member>/<agent>.safetensors``."""
+    agents = pretrained.load("1p-low")
+    config = pretrained.training_config("1p-low")
+    (path,) = [
+        p
+        for p in pretrained.export(
+            agents, config, tmp_path / "export", trained_episodes=15000, provenance={"preset": "reproduction"}
+        )
+        if p.name == "prey_0.safetensors"
+    ]
+    where = tmp_path / "populations" / populations.RULE_STUDY / "1p-high"
+    (where / "hierarchical-seed1000").mkdir(parents=True)
+    path.rename(where / "hierarchical-seed1000" / "prey_0.safetensors")
+    trained = {"preset": "reproduction", "episodes": 15000, "predator_kind": "hierarchical", "build": "0123abc"}
+    members = [
+        {
+            "name": "hierarchical-seed1000",
+            "kind": "hierarchical",
+            "policy": None,
+            "seed": 1000,
+            "trained": trained,
+            "files": {"prey_0": "hierarchical-seed1000/prey_0.safetensors"},
+        },
+        {
+            "name": "FleeingPrey",
+            "kind": "scripted",
+            "policy": "FleeingPrey",
+            "seed": None,
+            "trained": None,
+            "files": {},
+        },
+    ]
+    index = {
+        "population": "rule-study",
+        "condition": "1p-high",
+        "role": "prey",
+        "provisional": False,
+        "members": members,
+    }
+    (where / populations.INDEX).write_text(json.dumps(index))
+    folder = tmp_path / "populations"
+    assert populations.default("predator", folder) == populations.RULE_STUDY
+    assert populations.default("prey", folder) == populations.PROVISIONAL["predator"]
+    population = populations.load(populations.RULE_STUDY, "1p-high", folder=folder)
+    assert [m.name for m in population.members] == ["hierarchical-seed1000", "FleeingPrey"]
+    assert not population.provisional
+    (prey,) = population.members[0].agents("1p-high", ["prey_0"]).values()
+    assert populations.weights_digest(prey.learner.member_weights(prey.member)) in score._agent_weights(agents)
+
+
 # ------------------------------------------------------------------ the score
 
 
+@pytest.mark.slow
 def test_a_scripted_agents_score_is_a_direct_evaluation_of_the_same_episodes() -> None:
-    condition, episodes, seed = "2p-low-shared", 6, 7
+    condition, episodes, seed = "3p-low-shared", 6, 7
     result = score.score(score.resolve("always-chase", "predator"), [condition], episodes=episodes, seed=seed)
     found = result["conditions"][condition]
     population = populations.load(result["population"], condition)
@@ -116,17 +168,18 @@ def test_a_scripted_agents_score_is_a_direct_evaluation_of_the_same_episodes() -
     assert result["provisional"] is True
 
 
+@pytest.mark.slow
 def test_the_scored_run_is_kept_out_of_its_population() -> None:
-    condition = "2p-low-shared"
-    contestant = score.resolve("pretrained:2p-low-individual", "predator")
+    condition = "3p-low-shared"
+    contestant = score.resolve("pretrained:3p-low-individual", "predator")
     population = populations.load(populations.default("predator"), condition)
-    assert "shipped-2p-low-individual" in [m.name for m in population.members]
+    assert "shipped-3p-low-individual" in [m.name for m in population.members]
     assert score.excluded_members(contestant, population) == {
-        "shipped-2p-low-individual": "holds weights of the scored run"
+        "shipped-3p-low-individual": "holds weights of the scored run"
     }
     result = score.score(contestant, [condition], episodes=2, seed=0)
     found = result["conditions"][condition]
-    assert "shipped-2p-low-individual" not in found["members"] and found["excluded"]
+    assert "shipped-3p-low-individual" not in found["members"] and found["excluded"]
     # the hierarchical reference of each condition is its own run: nothing of another condition is excluded
     assert score.excluded_members(score.resolve("pretrained", "predator"), population) == {}
 
