@@ -204,8 +204,9 @@ def _run_folder(folder: Path, role: str) -> Contestant:
         config, agents, about = runs.described(folder)
     except (ValueError, OSError) as error:
         raise ValueError(f"{folder}: cannot load its agents ({error})") from None
-    mine = [n for n in slots(config.condition, role)]
-    if not all(isinstance(agents[n], LearningAgent) for n in mine):
+    if config.obstacles:
+        raise ValueError(f"{folder}: trained with obstacles; the populations play the paper's task, without")
+    if not all(isinstance(agents[n], LearningAgent) for n in slots(config.condition, role)):
         raise ValueError(f"{folder}: its {role} is scripted, not learned: score the scripted policy by name instead")
     fingerprint = _agent_weights(agents)
 
