@@ -45,7 +45,7 @@ def test_every_condition_has_a_population_of_each_role_and_none_holds_its_refere
             for member in population.members:
                 assert not member.digests() & reference, f"{name}/{condition}: {member.name} is the reference's"
             assert {m.policy for m in population.members if not m.learned} == {
-                p for p, r in populations.SCRIPTED.items() if r == role
+                p for p, (r, _) in populations.SCRIPTED.items() if r == role
             }
 
 

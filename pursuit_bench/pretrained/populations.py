@@ -57,21 +57,12 @@ PROVISIONAL = {"predator": "provisional-predators", "prey": "provisional-prey"}
 SIZE_BUDGET_BYTES = 15 * 1024 * 1024
 
 
-def _scripted(policy: str) -> Any:
-    return {
-        "FleeingPrey": FleeingPrey,
-        "AlwaysChase": AlwaysChase,
-        "AlwaysStalk": AlwaysStalk,
-        "PurePursuitPredator": PurePursuitPredator,
-    }[policy]()
-
-
-#: The scripted policies a member may name, and the role each plays.
-SCRIPTED = {
-    "FleeingPrey": "prey",
-    "AlwaysChase": "predator",
-    "AlwaysStalk": "predator",
-    "PurePursuitPredator": "predator",
+#: The scripted policies a member may name: the role each plays, and the policy.
+SCRIPTED: dict[str, tuple[str, Any]] = {
+    "FleeingPrey": ("prey", FleeingPrey),
+    "AlwaysChase": ("predator", AlwaysChase),
+    "AlwaysStalk": ("predator", AlwaysStalk),
+    "PurePursuitPredator": ("predator", PurePursuitPredator),
 }
 
 
@@ -103,7 +94,7 @@ class Member:
     def agents(self, condition: str, names: list[str]) -> dict[str, LearningAgent | ScriptedAgent]:
         """Its agents for the slots ``names`` of ``condition`` (scripted: one copy per slot)."""
         if self.policy is not None:
-            return {name: ScriptedAgent(name, _scripted(self.policy)) for name in names}
+            return {name: ScriptedAgent(name, SCRIPTED[self.policy][1]()) for name in names}
         out: dict[str, LearningAgent | ScriptedAgent] = {}
         for name in names:
             path = self.files[name]
@@ -221,8 +212,8 @@ def _member(entry: Any, where: Path, index: Path, role: str, slots: list[str]) -
         raise _bad(index, f"member {entry!r}: expected a name and a kind among {', '.join(KINDS)}")
     name, policy, files = entry["name"], entry.get("policy"), entry.get("files") or {}
     if entry["kind"] == "scripted":
-        if not isinstance(policy, str) or SCRIPTED.get(policy) != role:
-            roles = [p for p, r in SCRIPTED.items() if r == role]
+        if not isinstance(policy, str) or SCRIPTED.get(policy, ("",))[0] != role:
+            roles = [p for p, (r, _) in SCRIPTED.items() if r == role]
             raise _bad(index, f"member {name}: a scripted {role} needs a policy among {', '.join(roles)}")
         return Member(name, "scripted", policy, None, None, {})
     if policy is not None or sorted(files) != sorted(slots):
