@@ -40,8 +40,7 @@ def tables(results: Path = RESULTS) -> str:
         out.append(score.leaderboard_header(conditions))
         for row, result in mine:
             normalized = {c: v["normalized"] for c, v in result["conditions"].items()}
-            agg = result["aggregate"]
-            aggregate = "–" if agg["iqm"] is None else f"{agg['iqm']:.2f} [{agg['ci'][0]:.2f}, {agg['ci'][1]:.2f}]"
+            aggregate = score.aggregate_text(result["aggregate"])
             cells = ["–" if normalized.get(c) is None else f"{normalized[c]:.2f}" for c in conditions]
             out.append(f"| {row['who']} | {row['how']} | {row['budget']} | {aggregate} | " + " | ".join(cells) + " |")
             commands.append(f"- {row['who']} ({role}): `{row['command']}` → `results/score/{row['file']}`")

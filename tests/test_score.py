@@ -215,13 +215,16 @@ def test_the_aggregate_is_rliables_interquartile_mean() -> None:
     middle = np.sort(values)[2:8]  # 10 conditions: the lowest and highest two left out
     assert score.iqm(values) == pytest.approx(middle.mean()) == pytest.approx(stats.trim_mean(values, 0.25))
     rng = np.random.default_rng(1)
-    cells = [
-        (rng.normal(0.5 + j / 10, 0.1, (3, 8)), rng.normal(0.0, 0.1, (3, 8)), rng.normal(1.0, 0.1, (3, 8)))
+    cells = {
+        f"c{j}": (rng.normal(0.5 + j / 10, 0.1, (3, 8)), rng.normal(0.0, 0.1, (3, 8)), rng.normal(1.0, 0.1, (3, 8)))
         for j in range(5)
-    ]
+    }
     result = score.aggregate(cells, seed=3, resamples=400)
     assert result["ci"][0] < result["iqm"] < result["ci"][1]
     assert score.aggregate(cells, seed=3, resamples=400) == result  # seeded
+    flat = np.full((3, 8), -1.0)
+    undefined = score.aggregate({**cells, "same": (flat, flat, flat)}, seed=3, resamples=400)
+    assert undefined["undefined"] == ["same"] and undefined["iqm"] == result["iqm"]
 
 
 # ------------------------------------------------------------------ the command

@@ -110,7 +110,6 @@ def score(
         normalized = "–" if c["normalized"] is None else f"{c['normalized']:.2f}"
         click.echo(f"{condition}: return {c['mean_return']:+.3f}, normalized {normalized}{excluded}")
     agg = result["aggregate"]
-    if agg["iqm"] is not None:
-        click.echo(f"aggregate (IQM of normalized scores): {agg['iqm']:.2f} [{agg['ci'][0]:.2f}, {agg['ci'][1]:.2f}]")
+    click.echo(f"aggregate (IQM of normalized scores): {scoring.aggregate_text(agg)}")
     warning = "PROVISIONAL population; " if result["provisional"] else ""
     click.echo(f"{warning}results in {out / 'score.json'} and {out / 'score.md'}")

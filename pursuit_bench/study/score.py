@@ -327,18 +327,23 @@ def normalized(agent: float, random: float, reference: float) -> float | None:
 
 
 def aggregate(
-    cells: list[tuple[np.ndarray, np.ndarray, np.ndarray]], seed: int, resamples: int = RESAMPLES
+    cells: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]], seed: int, resamples: int = RESAMPLES
 ) -> dict[str, Any]:
     """The IQM of the normalized scores over conditions and its stratified-bootstrap percentile
     interval. ``cells``: per condition the (members × episodes) returns of the agent, the random
     agent and the reference on the same episodes; each resample draws members and episodes with
-    replacement within each condition, the same draws for the three."""
+    replacement within each condition, the same draws for the three. Conditions where the
+    reference does exactly as well as random have no normalized score and are left out (named
+    in ``undefined``), as is a condition from a resample where that happens."""
     rng = np.random.default_rng(seed)
-    values = [normalized(float(a.mean()), float(r.mean()), float(h.mean())) for a, r, h in cells]
-    if not cells or any(v is None for v in values):
-        return {"iqm": None, "ci": None, "conditions": len(cells), "resamples": resamples}
-    draws = np.zeros((resamples, len(cells)))
-    for j, (a, r, h) in enumerate(cells):
+    values = {c: normalized(float(a.mean()), float(r.mean()), float(h.mean())) for c, (a, r, h) in cells.items()}
+    used = [c for c, v in values.items() if v is not None]
+    undefined = [c for c in cells if c not in used]
+    if not used:
+        return {"iqm": None, "ci": None, "conditions": used, "undefined": undefined, "resamples": resamples}
+    draws = np.zeros((resamples, len(used)))
+    for j, condition in enumerate(used):
+        a, r, h = cells[condition]
         m, e = a.shape
         rows = rng.integers(0, m, (resamples, m))
         cols = rng.integers(0, e, (resamples, e))
@@ -349,9 +354,10 @@ def aggregate(
     per_draw = np.array([iqm(d[np.isfinite(d)]) if np.isfinite(d).any() else np.nan for d in draws])
     low, high = np.nanquantile(per_draw, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
     return {
-        "iqm": iqm(np.array(values, dtype=float)),
+        "iqm": iqm(np.array([values[c] for c in used], dtype=float)),
         "ci": [float(low), float(high)],
-        "conditions": len(cells),
+        "conditions": used,
+        "undefined": undefined,
         "resamples": resamples,
     }
 
@@ -424,7 +430,7 @@ def score(
     name = population or populations.default(role)
     refs = references or {r: reference(r, role) for r in REFERENCE_ROWS[role]}
     per_condition = {}
-    cells = []
+    cells = {}
     for condition in conditions:
         pop = populations.load(name, condition)
         if pop.role == role:
@@ -462,7 +468,7 @@ def score(
             "excluded": excluded,
             "provisional": pop.provisional,
         }
-        cells.append((averaged["agent"], averaged["random"], averaged[SHIPPED]))
+        cells[condition] = (averaged["agent"], averaged["random"], averaged[SHIPPED])
     return {
         "format": SCORE_FORMAT,
         "agent": contestant.label,
@@ -505,12 +511,21 @@ def leaderboard_row(result: dict[str, Any], how: str = "", budget: str = "") -> 
     """One leaderboard row: who, how trained, budget, aggregate with its interval, per-condition normalized scores."""
     agg = result["aggregate"]
     cells = [_number(c["normalized"]) for c in result["conditions"].values()]
-    aggregate_cell = "–" if agg["iqm"] is None else f"{agg['iqm']:.2f} [{agg['ci'][0]:.2f}, {agg['ci'][1]:.2f}]"
+    aggregate_cell = aggregate_text(agg)
     return (
         f"| {result['agent']} | {how or result['description']} | {budget or '–'} | {aggregate_cell} | "
         + " | ".join(cells)
         + " |"
     )
+
+
+def aggregate_text(agg: dict[str, Any]) -> str:
+    """The aggregate with its interval, and over how many conditions where some had no normalized score."""
+    if agg["iqm"] is None:
+        return "–"
+    text = f"{agg['iqm']:.2f} [{agg['ci'][0]:.2f}, {agg['ci'][1]:.2f}]"
+    used = len(agg["conditions"])
+    return text + (f" ({used} of {used + len(agg['undefined'])} conditions)" if agg["undefined"] else "")
 
 
 def leaderboard_header(conditions: list[str]) -> str:
