@@ -4,6 +4,7 @@ docs/leaderboard.md)."""
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -99,8 +100,11 @@ def score(
         sys.exit(130)
     finally:
         progress.close()
-    atomic_write_text(out / "score.md", scoring.markdown(result))
-    atomic_write_text(out / "score.json", scoring.dumps(result))  # last: says the pair is complete
+    texts = {"score.md": scoring.markdown(result), "score.json": scoring.dumps(result)}
+    for file, text in texts.items():  # complete under temporary names, then renamed: score.json last
+        atomic_write_text(out / f".{file}.tmp", text)
+    for file in texts:
+        os.replace(out / f".{file}.tmp", out / file)
     for condition, c in result["conditions"].items():
         excluded = (
             f"; excluded from the population (the scored run's own): {', '.join(c['excluded'])}"
