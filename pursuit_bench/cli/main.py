@@ -20,6 +20,7 @@ from pursuit_bench.cli.law import law
 from pursuit_bench.cli.pool import pool
 from pursuit_bench.cli.report import report
 from pursuit_bench.cli.robust import robust
+from pursuit_bench.cli.score import score
 from pursuit_bench.cli.sweep import sweep
 from pursuit_bench.cli.train import train
 from pursuit_bench.cli.view import conditions, view
@@ -52,7 +53,7 @@ def main() -> None:
     """pursuit-bench: predators hunt a prey; deep RL picks how hard, parallel navigation where."""
 
 
-for command in (conditions, train, evaluate, sweep, report, pool, analyze, law, robust, view):
+for command in (conditions, train, evaluate, sweep, report, pool, analyze, law, robust, score, view):
     main.add_command(command)
 
 

@@ -1,0 +1,569 @@
+"""``pursuit-bench score``: one agent, filling every slot of its role, played against each member
+of a shipped population of held-out opponents (:mod:`pursuit_bench.pretrained.populations`), on
+the same episodes for every member, beside the reference agents on those same episodes; a
+normalized score per condition and an aggregate over conditions (docs/leaderboard.md).
+
+The statistics (docs/leaderboard.md says why):
+
+- per condition, the agent's mean return over members × episodes with a 95 % interval for a
+  **crossed design with both members and episodes random** (:func:`crossed_interval`): the
+  two-way ANOVA's variance of the grand mean, ``(MS_members + MS_episodes − MS_residual) / (M E)``,
+  and Satterthwaite's degrees of freedom;
+- a normalized score, ``(agent − random) / (reference − random)``: 0 is the uniformly random
+  agent, 1 the hierarchical reference (the condition's shipped agents) on the same episodes;
+- the aggregate: the interquartile mean of the normalized scores over conditions, as rliable
+  defines it (Agarwal et al., NeurIPS 2021: ``scipy.stats.trim_mean(scores, 0.25)`` over runs ×
+  tasks; here one scored agent, so over conditions), with a percentile interval from a
+  stratified bootstrap: within each condition the members and the episodes resampled (the
+  sources of this score's randomness, as a run is rliable's), the normalized score recomputed.
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from pursuit_bench import pretrained
+from pursuit_bench.agents import external
+from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.env.task import obs_size
+from pursuit_bench.pretrained import populations
+from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey, PurePursuitPredator
+from pursuit_bench.training import runs
+from pursuit_bench.training.evaluate import run_episodes
+
+CONFIDENCE = 0.95
+RESAMPLES = 2000
+#: The ε the paper's evaluation protocol gives a learned prey (section 3.4); predators act greedily.
+PREY_EPSILON = 0.1
+SCORE_FORMAT = "pursuit-bench-score-1"
+
+
+class UniformRandom:
+    """Uniformly random actions: a predator's (mode, direction), the prey's direction; seeded."""
+
+    def __init__(self, predator: bool, seed: int) -> None:
+        self.predator, self.rng = predator, np.random.default_rng(seed)
+
+    def act_batch(self, observations: np.ndarray) -> np.ndarray:
+        n = len(observations)
+        if self.predator:
+            return np.stack([self.rng.integers(0, 2, n), self.rng.integers(0, 12, n)], axis=-1)
+        return self.rng.integers(0, 12, n)
+
+    def act(self, observation: np.ndarray) -> Any:
+        return self.act_batch(np.asarray(observation)[None])[0]
+
+
+#: The reference agents by name: (role, what they are, policy(seed)).
+REFERENCES: dict[str, tuple[str, str, Callable[[int], Any]]] = {
+    "random": ("both", "uniformly random actions", lambda seed: None),
+    "always-chase": ("predator", "chase mode always, parallel navigation", lambda seed: AlwaysChase()),
+    "always-stalk": ("predator", "stalk mode always, parallel navigation", lambda seed: AlwaysStalk()),
+    "pure-pursuit": ("predator", "chase mode always, straight at the prey", lambda seed: PurePursuitPredator()),
+    "FleeingPrey": ("prey", "flees the nearest predator, keeps off the walls", lambda seed: FleeingPrey()),
+}
+#: The name of the hierarchical reference (the condition's shipped agents).
+SHIPPED = "pretrained"
+#: What score.json reports beside the agent, per role (the reference a score is normalized by last).
+REFERENCE_ROWS = {
+    "predator": ("random", "always-chase", "always-stalk", "pure-pursuit", SHIPPED),
+    "prey": ("random", "FleeingPrey", SHIPPED),
+}
+
+
+def slots(condition: str, role: str) -> list[str]:
+    """The agent names of ``role`` in ``condition``."""
+    names = list(CONDITIONS[condition].agent_names)
+    return names[:-1] if role == "predator" else names[-1:]
+
+
+@dataclass
+class Contestant:
+    """An agent that fills every slot of a role: ``make(condition, seed)`` gives fresh agents by
+    slot (so that every play starts from the same state)."""
+
+    label: str
+    """As given on the command line."""
+    description: str
+    role: str
+    make: Callable[[str, int], dict[str, Any]]
+    can_play: Callable[[str], bool] = lambda condition: True
+    digests: Callable[[str], set[str]] = lambda condition: set()
+    """Fingerprints of every learned agent of the run it comes from (both roles): a population
+    member with one of these is the scored run's own and is excluded."""
+    runs: Callable[[str], set[tuple[str, int]]] = lambda condition: set()
+    """(condition, seed) of the runs it comes from: a member trained in the same is excluded."""
+    copies: bool = True
+    """One agent copied into every slot (a module, a reference), not a trained team."""
+
+
+def _agent_weights(agents: dict[str, Any]) -> set[str]:
+    return {
+        populations.weights_digest(agent.learner.member_weights(agent.member))
+        for agent in agents.values()
+        if isinstance(agent, LearningAgent)
+    }
+
+
+def _renamed(agents: dict[str, Any], names: list[str]) -> dict[str, Any]:
+    for name in names:
+        agents[name].name = name
+    return {name: agents[name] for name in names}
+
+
+def reference(name: str, role: str) -> Contestant:
+    """A reference agent by name (:data:`REFERENCES`, or :data:`SHIPPED`: the hierarchical reference)."""
+    if name == SHIPPED:
+        return _shipped_each(role)
+    plays, description, policy = REFERENCES[name]
+    if plays not in ("both", role):
+        raise ValueError(f"{name} is a {plays}: it cannot play --role {role}")
+
+    def make(condition: str, seed: int) -> dict[str, Any]:
+        names = slots(condition, role)
+        if name == "random":
+            return {n: ScriptedAgent(n, UniformRandom(role == "predator", seed + i)) for i, n in enumerate(names)}
+        return {n: ScriptedAgent(n, policy(seed)) for n in names}
+
+    return Contestant(name, f"{name} ({description})", role, make)
+
+
+def _shipped_each(role: str) -> Contestant:
+    """In each condition, that condition's shipped agents (the hierarchical reference)."""
+
+    def make(condition: str, seed: int) -> dict[str, Any]:
+        return _renamed(pretrained.load(condition), slots(condition, role))
+
+    def digests(condition: str) -> set[str]:
+        return _agent_weights(pretrained.load(condition))
+
+    return Contestant(
+        SHIPPED,
+        "the shipped agents of each condition (hierarchical predators and the prey trained with them)",
+        role,
+        make,
+        can_play=lambda condition: condition in pretrained.available(),
+        digests=digests,
+        runs=lambda condition: {(condition, int(next(iter(pretrained.info(condition).values()))["seed"]))},
+        copies=False,
+    )
+
+
+def _team_size_matches(trained_in: str) -> Callable[[str], bool]:
+    n = len(CONDITIONS[trained_in].agent_names)
+    return lambda condition: len(CONDITIONS[condition].agent_names) == n
+
+
+def resolve(spec: str, role: str) -> Contestant:
+    """The contestant ``spec`` names: a reference name, ``pretrained`` / ``pretrained:CONDITION``,
+    a run folder or ``MODULE:FACTORY``; ValueError in one line if it cannot be played."""
+    by_lower = {k.lower(): k for k in REFERENCES}
+    if spec.lower() in by_lower:
+        return reference(by_lower[spec.lower()], role)
+    if spec == SHIPPED:
+        return _shipped_each(role)
+    if spec.startswith(f"{SHIPPED}:"):
+        source = spec.removeprefix(f"{SHIPPED}:")
+        if source not in pretrained.available():
+            raise ValueError(
+                f"{spec}: no shipped agents for {source!r}; expected one of {', '.join(pretrained.available())}"
+            )
+        seed = int(next(iter(pretrained.info(source).values()))["seed"])
+        return Contestant(
+            spec,
+            f"the shipped {'predators' if role == 'predator' else 'prey'} of {source}",
+            role,
+            lambda condition, s: _renamed(pretrained.load(source), slots(condition, role)),
+            can_play=_team_size_matches(source),
+            digests=lambda condition: _agent_weights(pretrained.load(source)),
+            runs=lambda condition: {(source, seed)},
+            copies=False,
+        )
+    folder = Path(spec)
+    if (folder / "config.json").is_file():
+        return _run_folder(folder, role)
+    if ":" in spec and not folder.exists():
+        return _module(spec, role)
+    raise ValueError(
+        f"{spec}: expected MODULE:FACTORY, a run folder (with config.json), pretrained[:CONDITION] or a reference "
+        f"name ({', '.join(REFERENCES)})"
+    )
+
+
+def _run_folder(folder: Path, role: str) -> Contestant:
+    try:
+        config, agents, about = runs.described(folder)
+    except (ValueError, OSError) as error:
+        raise ValueError(f"{folder}: cannot load its agents ({error})") from None
+    if config.obstacles:
+        raise ValueError(f"{folder}: trained with obstacles; the populations play the paper's task, without")
+    if not all(isinstance(agents[n], LearningAgent) for n in slots(config.condition, role)):
+        raise ValueError(f"{folder}: its {role} is scripted, not learned: score the scripted policy by name instead")
+    fingerprint = _agent_weights(agents)
+
+    def make(condition: str, seed: int) -> dict[str, Any]:
+        return _renamed(runs.described(folder)[1], slots(condition, role))
+
+    return Contestant(
+        str(folder),
+        f"the {config.predator} run {folder.name} ({config.condition}, seed {config.seed}, "
+        f"{about['trained_episodes']} episodes)",
+        role,
+        make,
+        can_play=_team_size_matches(config.condition),
+        digests=lambda condition: fingerprint,
+        runs=lambda condition: {(config.condition, config.seed)},
+        copies=False,
+    )
+
+
+def _module(spec: str, role: str) -> Contestant:
+    factory: Callable[..., Any] = external.load_factory(spec)
+    takes_condition = "condition" in inspect.signature(factory).parameters
+
+    def make(condition: str, seed: int) -> dict[str, Any]:
+        made = {}
+        for name in slots(condition, role):
+            try:
+                agent = factory(condition=condition) if takes_condition else factory()
+            except Exception as error:
+                raise ValueError(f"{spec}: the factory raised {type(error).__name__}: {error}") from None
+            made[name] = external.ExternalAgent(name, agent, spec, predator=role == "predator")
+        return made
+
+    return Contestant(spec, f"{spec} (an agent module)", role, make)
+
+
+def check_plays(contestant: Contestant, condition: str) -> None:
+    """Refuse at once an agent that cannot act in ``condition``'s role: it is asked for actions for
+    a few observations of the right size and must answer them in the role's action space."""
+    agents = contestant.make(condition, 0)
+    n_obs = obs_size(len(CONDITIONS[condition].agent_names))
+    for agent in agents.values():
+        if isinstance(agent, external.ExternalAgent):
+            try:
+                agent.act_batch(np.zeros((2, n_obs), dtype=np.float32))
+            except ValueError as error:
+                raise ValueError(f"cannot play --role {contestant.role} in {condition}: {error}") from None
+
+
+# ------------------------------------------------------------------ statistics
+
+
+def crossed_interval(y: np.ndarray, confidence: float = CONFIDENCE) -> dict[str, Any]:
+    """The mean of ``y`` (members × episodes) with a ``confidence`` interval treating both the
+    members and the episodes as random draws (a crossed two-way random-effects design): the
+    variance of the grand mean is ``σ²_m / M + σ²_e / E + σ²_r / (M E)``, estimated without bias by
+    ``(MS_m + MS_e − MS_r) / (M E)`` from the two-way ANOVA's mean squares, with Satterthwaite's
+    degrees of freedom. One member: the t-interval over episodes. Its coverage, measured by
+    :func:`coverage` (docs/leaderboard.md), is 93–96 % from four members up and falls to 87–95 %
+    with two."""
+    y = np.asarray(y, dtype=float)
+    m, e = y.shape
+    grand = float(y.mean())
+    if e < 2:
+        return {"mean": grand, "ci": None, "df": None, "se": None}
+    if m == 1:
+        se = float(y[0].std(ddof=1) / np.sqrt(e))
+        half = float(stats.t.ppf(0.5 + confidence / 2, e - 1)) * se
+        return {"mean": grand, "ci": [grand - half, grand + half], "df": float(e - 1), "se": se}
+    rows, cols = y.mean(axis=1), y.mean(axis=0)
+    ms_m = e * float(((rows - grand) ** 2).sum()) / (m - 1)
+    ms_e = m * float(((cols - grand) ** 2).sum()) / (e - 1)
+    residual = y - rows[:, None] - cols[None, :] + grand
+    df_r = (m - 1) * (e - 1)
+    ms_r = float((residual**2).sum()) / df_r
+    # the variance of the grand mean, (MS_m + MS_e − MS_r) / (M E): unbiased; where it comes out not
+    # positive, the residual's term is left out (an overestimate, never a zero-width interval)
+    terms = [(ms_m, m - 1), (ms_e, e - 1), (-ms_r, df_r)]
+    if ms_m + ms_e - ms_r <= 0:
+        terms = terms[:2]
+    total = sum(t for t, _ in terms)
+    if total <= 0:  # every return the same
+        return {"mean": grand, "ci": [grand, grand], "df": None, "se": 0.0}
+    variance = total / (m * e)
+    df = total**2 / sum(t**2 / d for t, d in terms)
+    se = float(np.sqrt(variance))
+    half = float(stats.t.ppf(0.5 + confidence / 2, df)) * se
+    return {"mean": grand, "ci": [grand - half, grand + half], "df": float(df), "se": se}
+
+
+def coverage(
+    draw: Callable[[np.random.Generator, int, int], np.ndarray],
+    truth: float,
+    members: int,
+    episodes: int,
+    draws: int,
+    seed: int = 0,
+) -> float:
+    """The fraction of ``draws`` simulated (members × episodes) tables, ``draw(rng, members,
+    episodes)``, whose :func:`crossed_interval` holds ``truth``."""
+    rng = np.random.default_rng(seed)
+    held = 0
+    for _ in range(draws):
+        ci = crossed_interval(draw(rng, members, episodes))["ci"]
+        held += ci is not None and ci[0] <= truth <= ci[1]
+    return held / draws
+
+
+def iqm(scores: np.ndarray) -> float:
+    """The interquartile mean (rliable's ``aggregate_iqm``: the 25 % trimmed mean of all scores)."""
+    return float(stats.trim_mean(np.asarray(scores, dtype=float), 0.25, axis=None))
+
+
+def normalized(agent: float, random: float, reference: float) -> float | None:
+    """``(agent − random) / (reference − random)``; None where the reference does no better or
+    worse than random (no scale)."""
+    return None if reference == random else (agent - random) / (reference - random)
+
+
+def aggregate(
+    cells: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]], seed: int, resamples: int = RESAMPLES
+) -> dict[str, Any]:
+    """The IQM of the normalized scores over conditions and its stratified-bootstrap percentile
+    interval. ``cells``: per condition the (members × episodes) returns of the agent, the random
+    agent and the reference on the same episodes; each resample draws members and episodes with
+    replacement within each condition, the same draws for the three. Conditions where the
+    reference does exactly as well as random have no normalized score and are left out (named
+    in ``undefined``), as is a condition from a resample where that happens."""
+    rng = np.random.default_rng(seed)
+    values = {c: normalized(float(a.mean()), float(r.mean()), float(h.mean())) for c, (a, r, h) in cells.items()}
+    used = [c for c, v in values.items() if v is not None]
+    undefined = [c for c in cells if c not in used]
+    if not used:
+        return {"iqm": None, "ci": None, "conditions": used, "undefined": undefined, "resamples": resamples}
+    draws = np.zeros((resamples, len(used)))
+    for j, condition in enumerate(used):
+        a, r, h = cells[condition]
+        m, e = a.shape
+        rows = rng.integers(0, m, (resamples, m))
+        cols = rng.integers(0, e, (resamples, e))
+        for k in range(resamples):
+            pick = np.ix_(rows[k], cols[k])
+            ra, rr, rh = a[pick].mean(), r[pick].mean(), h[pick].mean()
+            draws[k, j] = (ra - rr) / (rh - rr) if rh != rr else np.nan
+    per_draw = np.array([iqm(d[np.isfinite(d)]) if np.isfinite(d).any() else np.nan for d in draws])
+    low, high = np.nanquantile(per_draw, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
+    return {
+        "iqm": iqm(np.array([values[c] for c in used], dtype=float)),
+        "ci": [float(low), float(high)],
+        "conditions": used,
+        "undefined": undefined,
+        "resamples": resamples,
+    }
+
+
+# ------------------------------------------------------------------ playing
+
+
+def _epsilons(agents: dict[str, Any]) -> dict[str, float]:
+    """The protocol's ε: a learned prey (ours) explores with ε = 0.1, everyone else acts greedily."""
+    return {n: PREY_EPSILON for n, a in agents.items() if isinstance(a, LearningAgent) and a.kind == "prey"}
+
+
+def play(
+    condition: str,
+    contestant: Contestant,
+    member: populations.Member,
+    episodes: int,
+    seed: int,
+    num_envs: int,
+    on_episodes: Callable[[int], None] = lambda n: None,
+) -> np.ndarray:
+    """The contestant's returns (episodes × its slots) against one member, on the episodes ``seed`` fixes."""
+    role = contestant.role
+    other = "prey" if role == "predator" else "predator"
+    agents = {**member.agents(condition, slots(condition, other)), **contestant.make(condition, seed)}
+    agents = {name: agents[name] for name in CONDITIONS[condition].agent_names}
+
+    def heard(obs: np.ndarray, actions: np.ndarray, done: np.ndarray) -> None:
+        if done.any():
+            on_episodes(int(done.sum()))
+
+    played = run_episodes(
+        condition, agents, episodes, seed=seed, num_envs=num_envs, epsilons=_epsilons(agents), on_step=heard
+    )
+    index = [list(agents).index(name) for name in slots(condition, role)]
+    return np.asarray(played.returns[:, index], dtype=float)
+
+
+def excluded_members(contestant: Contestant, population: populations.Population) -> dict[str, str]:
+    """The members that come from the scored agent's own run, and why."""
+    mine = contestant.digests(population.condition)
+    out = {}
+    for member in population.members:
+        if not member.learned:
+            continue
+        if member.digests() & mine:
+            out[member.name] = "holds weights of the scored run"
+        else:
+            trained_in = {pretrained.read(p)[1].get("condition") for p in member.files.values()}
+            if any((c, member.seed) in contestant.runs(population.condition) for c in trained_in):
+                out[member.name] = f"trained in the scored run's condition with its seed ({member.seed})"
+    return out
+
+
+def score(
+    contestant: Contestant,
+    conditions: list[str],
+    *,
+    episodes: int,
+    seed: int,
+    population: str | None = None,
+    num_envs: int = 64,
+    on_episodes: Callable[[int], None] = lambda n: None,
+    references: dict[str, Contestant] | None = None,
+) -> dict[str, Any]:
+    """Score ``contestant`` in ``conditions`` against the population (``population``, or the
+    role's default); returns what score.json holds. ``on_episodes(n)`` hears every n episodes
+    finished. ``references``: the reference contestants (by default :data:`REFERENCE_ROWS`)."""
+    role = contestant.role
+    name = population or populations.default(role)
+    refs = references or {r: reference(r, role) for r in REFERENCE_ROWS[role]}
+    per_condition = {}
+    cells = {}
+    for condition in conditions:
+        pop = populations.load(name, condition)
+        if pop.role == role:
+            raise ValueError(f"population {name} holds {pop.role}s: a {role} is scored against the other role")
+        excluded = excluded_members(contestant, pop)
+        pop = pop.without(set(excluded))
+        if not pop.members:
+            raise ValueError(f"{condition}: every member of population {name} comes from the scored run")
+        returns: dict[str, np.ndarray] = {}  # contestant -> (members, episodes, slots)
+        for key, who in {"agent": contestant, **refs}.items():
+            if key != "agent" and key == contestant.label:  # the agent is this reference: the same plays
+                returns[key] = returns["agent"]
+                continue
+            returns[key] = np.stack(
+                [play(condition, who, m, episodes, seed, min(num_envs, episodes), on_episodes) for m in pop.members]
+            )
+        averaged = {key: r.mean(axis=2) for key, r in returns.items()}
+        agent = crossed_interval(averaged["agent"])
+        random, shipped = float(averaged["random"].mean()), float(averaged[SHIPPED].mean())
+        per_condition[condition] = {
+            "mean_return": agent["mean"],
+            "ci": agent["ci"],
+            "df": agent["df"],
+            "per_slot": dict(zip(slots(condition, role), returns["agent"].mean(axis=(0, 1)).tolist(), strict=True)),
+            "per_member": dict(
+                zip([m.name for m in pop.members], averaged["agent"].mean(axis=1).tolist(), strict=True)
+            ),
+            "normalized": normalized(agent["mean"], random, shipped),
+            "references": {
+                key: {"mean_return": float(r.mean()), "ci": crossed_interval(r)["ci"]}
+                for key, r in averaged.items()
+                if key != "agent"
+            },
+            "members": [m.name for m in pop.members],
+            "excluded": excluded,
+            "provisional": pop.provisional,
+        }
+        cells[condition] = (averaged["agent"], averaged["random"], averaged[SHIPPED])
+    return {
+        "format": SCORE_FORMAT,
+        "agent": contestant.label,
+        "description": contestant.description,
+        "role": role,
+        "fills": f"every {role} slot (a team of copies where a condition has several predators)"
+        if role == "predator"
+        else "the prey's slot",
+        "population": name,
+        "provisional": any(c["provisional"] for c in per_condition.values()),
+        "episodes": episodes,
+        "seed": seed,
+        "protocol": "predators greedy; a learned prey of ours ε-greedy with ε = 0.1 (the paper's section 3.4); "
+        "agent modules act as they are; every member and every agent plays the episodes the seed fixes",
+        "interval": "95 % crossed random-effects interval (members and episodes random; ANOVA components, "
+        "Satterthwaite df); docs/leaderboard.md",
+        "normalization": "(agent − random) / (reference − random): 0 = uniformly random agent, 1 = the condition's "
+        "shipped agents (hierarchical predators, or the prey trained with them), same members and episodes",
+        "aggregate": {
+            **aggregate(cells, seed),
+            "statistic": "interquartile mean over conditions (rliable, Agarwal et al. 2021), stratified bootstrap "
+            "(members and episodes resampled within each condition), percentile interval",
+        },
+        "conditions": per_condition,
+    }
+
+
+# ------------------------------------------------------------------ the report
+
+
+def _interval(ci: list[float] | None) -> str:
+    return "–" if ci is None else f"[{ci[0]:+.3f}, {ci[1]:+.3f}]"
+
+
+def _number(value: float | None) -> str:
+    return "–" if value is None else f"{value:.2f}"
+
+
+def leaderboard_row(result: dict[str, Any], how: str = "", budget: str = "") -> str:
+    """One leaderboard row: who, how trained, budget, aggregate with its interval, per-condition normalized scores."""
+    agg = result["aggregate"]
+    cells = [_number(c["normalized"]) for c in result["conditions"].values()]
+    aggregate_cell = aggregate_text(agg)
+    return (
+        f"| {result['agent']} | {how or result['description']} | {budget or '–'} | {aggregate_cell} | "
+        + " | ".join(cells)
+        + " |"
+    )
+
+
+def aggregate_text(agg: dict[str, Any]) -> str:
+    """The aggregate with its interval, and over how many conditions where some had no normalized score."""
+    if agg["iqm"] is None:
+        return "–"
+    text = f"{agg['iqm']:.2f} [{agg['ci'][0]:.2f}, {agg['ci'][1]:.2f}]"
+    used = len(agg["conditions"])
+    return text + (f" ({used} of {used + len(agg['undefined'])} conditions)" if agg["undefined"] else "")
+
+
+def leaderboard_header(conditions: list[str]) -> str:
+    return (
+        "| agent | how trained | budget | IQM, normalized [95 % CI] | " + " | ".join(conditions) + " |\n"
+        "|---|---|---|---|" + "---:|" * len(conditions)
+    )
+
+
+def markdown(result: dict[str, Any]) -> str:
+    """score.md: the leaderboard row and the per-condition table."""
+    conditions = list(result["conditions"])
+    provisional = " (PROVISIONAL population: the rule study's is not committed yet)" if result["provisional"] else ""
+    refs = list(next(iter(result["conditions"].values()))["references"])
+    lines = [
+        f"# Score of {result['agent']} as {result['role']}",
+        "",
+        f"Against population `{result['population']}`{provisional}; {result['episodes']} episodes per member, "
+        f"seed {result['seed']}; the agent fills {result['fills']}.",
+        "",
+        leaderboard_header(conditions),
+        leaderboard_row(result),
+        "",
+        "| condition | mean return [95 % CI] | normalized | "
+        + " | ".join("shipped (hierarchical)" if r == SHIPPED else r for r in refs)
+        + " | members (excluded) |",
+        "|---|---|---:|" + "---:|" * len(refs) + "---|",
+    ]
+    for condition, c in result["conditions"].items():
+        excluded = f" (excluded: {', '.join(c['excluded'])})" if c["excluded"] else ""
+        lines.append(
+            f"| {condition} | {c['mean_return']:+.3f} {_interval(c['ci'])} | {_number(c['normalized'])} | "
+            + " | ".join(f"{c['references'][r]['mean_return']:+.3f}" for r in refs)
+            + f" | {', '.join(c['members'])}{excluded} |"
+        )
+    lines += ["", f"Interval: {result['interval']}. Normalization: {result['normalization']}.", ""]
+    return "\n".join(lines)
+
+
+def dumps(result: dict[str, Any]) -> str:
+    return json.dumps(result, indent=2) + "\n"

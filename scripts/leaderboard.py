@@ -1,0 +1,68 @@
+"""docs/leaderboard.md's tables, regenerated from the committed score files: the rows listed in
+results/score/rows.json (each a score.json under results/score/ and how its agent was trained),
+written between the page's ``<!-- leaderboard:begin -->`` and ``<!-- leaderboard:end -->``
+markers; the prose around them is the page's own. tests/test_score.py checks the page is what
+this writes, byte for byte.
+
+    python scripts/leaderboard.py            # rewrite docs/leaderboard.md
+    python scripts/leaderboard.py --check    # exit 1 if it is not up to date
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from pursuit_bench.io.files import atomic_write_text
+from pursuit_bench.study import score
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results" / "score"
+PAGE = ROOT / "docs" / "leaderboard.md"
+BEGIN, END = "<!-- leaderboard:begin -->", "<!-- leaderboard:end -->"
+
+
+def tables(results: Path = RESULTS) -> str:
+    """The leaderboard's tables, one per role, and the command behind each row."""
+    rows: list[dict[str, Any]] = json.loads((results / "rows.json").read_text())
+    out = [BEGIN, ""]
+    commands = []
+    for role in ("predator", "prey"):
+        mine = [(row, json.loads((results / row["file"]).read_text())) for row in rows if row["role"] == role]
+        if not mine:
+            continue
+        conditions = sorted({c for _, r in mine for c in r["conditions"]}, key=list(score.CONDITIONS).index)
+        populations = sorted({r["population"] for _, r in mine})
+        provisional = " (provisional)" if any(r["provisional"] for _, r in mine) else ""
+        out += [f"### {role.capitalize()} role", "", f"Against population {', '.join(populations)}{provisional}.", ""]
+        out.append(score.leaderboard_header(conditions))
+        for row, result in mine:
+            normalized = {c: v["normalized"] for c, v in result["conditions"].items()}
+            aggregate = score.aggregate_text(result["aggregate"])
+            cells = ["–" if normalized.get(c) is None else f"{normalized[c]:.2f}" for c in conditions]
+            out.append(f"| {row['who']} | {row['how']} | {row['budget']} | {aggregate} | " + " | ".join(cells) + " |")
+            commands.append(f"- {row['who']} ({role}): `{row['command']}` → `results/score/{row['file']}`")
+        out.append("")
+    out += ["The commands behind the rows (run from the repository's root):", "", *commands, "", END]
+    return "\n".join(out)
+
+
+def render(page: str, results: Path = RESULTS) -> str:
+    """``page`` with its tables regenerated."""
+    before, _, rest = page.partition(BEGIN)
+    _, _, after = rest.partition(END)
+    return before + tables(results) + after
+
+
+def main() -> None:
+    page = PAGE.read_text()
+    new = render(page)
+    if "--check" in sys.argv:
+        sys.exit(0 if new == page else 1)
+    atomic_write_text(PAGE, new)
+
+
+if __name__ == "__main__":
+    main()

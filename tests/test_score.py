@@ -1,0 +1,298 @@
+"""``pursuit-bench score``: the shipped populations (format, size, safety), the score against a
+direct evaluation of the same episodes, the scored run kept out of its population, the
+interval's coverage, the aggregate, the refusals, and the leaderboard page regenerated."""
+
+import importlib.util
+import json
+import pickle
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from cli_helpers import run_cli
+from scipy import stats
+from scipy.special import expit
+
+from pursuit_bench import pretrained
+from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.pretrained import populations
+from pursuit_bench.rules.policies import AlwaysChase
+from pursuit_bench.study import score
+from pursuit_bench.training.evaluate import evaluate_agents
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ------------------------------------------------------------------ the populations
+
+
+def test_the_shipped_populations_fit_the_size_budget() -> None:
+    size = populations.size_bytes()
+    assert 0 < size <= populations.SIZE_BUDGET_BYTES == 15 * 1024 * 1024, f"{size / 2**20:.1f} MiB"
+
+
+def test_every_condition_has_a_population_of_each_role_and_none_holds_its_reference() -> None:
+    shipped = populations.available()
+    for role, name in populations.PROVISIONAL.items():
+        assert shipped[name] == list(CONDITIONS)
+        for condition in CONDITIONS:
+            population = populations.load(name, condition)
+            assert (population.role, population.provisional) == (role, True)
+            reference = score._agent_weights(pretrained.load(condition))
+            for member in population.members:
+                assert not member.digests() & reference, f"{name}/{condition}: {member.name} is the reference's"
+            assert {m.policy for m in population.members if not m.learned} == {
+                p for p, (r, _) in populations.SCRIPTED.items() if r == role
+            }
+
+
+def test_the_populations_load_without_running_code_from_the_files(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every member's agents are built from JSON and safetensors only: unpickling is made to fail."""
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a population file was unpickled")
+
+    monkeypatch.setattr(pickle, "loads", refuse)
+    monkeypatch.setattr(pickle, "load", refuse)
+    monkeypatch.setattr(torch, "load", refuse)
+    for name in populations.PROVISIONAL.values():
+        for condition in ("1p-high", "3p-low-shared"):
+            population = populations.load(name, condition)
+            other = score.slots(condition, population.role)
+            for member in population.members:
+                for path in member.files.values():
+                    header_length = int.from_bytes(path.read_bytes()[:8], "little")  # safetensors: JSON header first
+                    json.loads(path.read_bytes()[8 : 8 + header_length])
+                agents = member.agents(condition, other)
+                assert list(agents) == other
+                assert all(isinstance(a, LearningAgent if member.learned else ScriptedAgent) for a in agents.values())
+
+
+def test_a_population_that_breaks_the_format_is_refused(tmp_path: Path) -> None:
+    where = tmp_path / "mine" / "1p-high"
+    where.mkdir(parents=True)
+    member = {"name": "a", "kind": "hierarchical", "policy": None, "seed": 1000, "trained": None, "files": {}}
+    for members, message in (
+        ([member], "files for prey_0"),
+        ([{**member, "kind": "scripted", "policy": "AlwaysChase"}], "a scripted prey needs"),
+        ([{**member, "files": {"prey_0": "../../elsewhere.safetensors"}}], "outside the population's folder"),
+        ([], "at least one member"),
+    ):
+        index = {"population": "mine", "condition": "1p-high", "role": "prey", "provisional": False, "members": members}
+        (where / populations.INDEX).write_text(json.dumps(index))
+        with pytest.raises(ValueError, match=message):
+            populations.load("mine", "1p-high", folder=tmp_path)
+    with pytest.raises(ValueError, match="no population 'other'"):
+        populations.load("other", "1p-high", folder=tmp_path)
+
+
+def test_a_population_written_as_the_rule_study_writes_it_is_read_as_it_stands(tmp_path: Path) -> None:
+    """OWNERS.md's format: members exported by ``pretrained.export`` into ``<member>/<agent>.safetensors``."""
+    agents = pretrained.load("1p-low")
+    config = pretrained.training_config("1p-low")
+    (path,) = [
+        p
+        for p in pretrained.export(
+            agents, config, tmp_path / "export", trained_episodes=15000, provenance={"preset": "reproduction"}
+        )
+        if p.name == "prey_0.safetensors"
+    ]
+    where = tmp_path / "populations" / populations.RULE_STUDY / "1p-high"
+    (where / "hierarchical-seed1000").mkdir(parents=True)
+    path.rename(where / "hierarchical-seed1000" / "prey_0.safetensors")
+    trained = {"preset": "reproduction", "episodes": 15000, "predator_kind": "hierarchical", "build": "0123abc"}
+    members = [
+        {
+            "name": "hierarchical-seed1000",
+            "kind": "hierarchical",
+            "policy": None,
+            "seed": 1000,
+            "trained": trained,
+            "files": {"prey_0": "hierarchical-seed1000/prey_0.safetensors"},
+        },
+        {
+            "name": "FleeingPrey",
+            "kind": "scripted",
+            "policy": "FleeingPrey",
+            "seed": None,
+            "trained": None,
+            "files": {},
+        },
+    ]
+    index = {
+        "population": "rule-study",
+        "condition": "1p-high",
+        "role": "prey",
+        "provisional": False,
+        "members": members,
+    }
+    (where / populations.INDEX).write_text(json.dumps(index))
+    folder = tmp_path / "populations"
+    assert populations.default("predator", folder) == populations.RULE_STUDY
+    assert populations.default("prey", folder) == populations.PROVISIONAL["predator"]
+    population = populations.load(populations.RULE_STUDY, "1p-high", folder=folder)
+    assert [m.name for m in population.members] == ["hierarchical-seed1000", "FleeingPrey"]
+    assert not population.provisional
+    (prey,) = population.members[0].agents("1p-high", ["prey_0"]).values()
+    assert populations.weights_digest(prey.learner.member_weights(prey.member)) in score._agent_weights(agents)
+
+
+# ------------------------------------------------------------------ the score
+
+
+@pytest.mark.slow
+def test_a_scripted_agents_score_is_a_direct_evaluation_of_the_same_episodes() -> None:
+    condition, episodes, seed = "3p-low-shared", 6, 7
+    result = score.score(score.resolve("always-chase", "predator"), [condition], episodes=episodes, seed=seed)
+    found = result["conditions"][condition]
+    population = populations.load(result["population"], condition)
+    assert found["members"] == [m.name for m in population.members]
+    for member in population.members:
+        prey = member.agents(condition, ["prey_0"])
+        team = {name: ScriptedAgent(name, AlwaysChase()) for name in score.slots(condition, "predator")}
+        direct = evaluate_agents(
+            condition,
+            {**team, **prey},
+            episodes=episodes,
+            seed=seed,
+            prey_epsilon=0.1 if member.learned else None,
+            num_envs=episodes,
+            prey_check=False,
+        )
+        trained = np.mean([panel["trained"] for panel in direct["panels"]])
+        assert found["per_member"][member.name] == pytest.approx(trained, abs=1e-12)
+    assert found["references"]["always-chase"]["mean_return"] == found["mean_return"]
+    assert result["provisional"] is True
+
+
+@pytest.mark.slow
+def test_the_scored_run_is_kept_out_of_its_population() -> None:
+    condition = "3p-low-shared"
+    contestant = score.resolve("pretrained:3p-low-individual", "predator")
+    population = populations.load(populations.default("predator"), condition)
+    assert "shipped-3p-low-individual" in [m.name for m in population.members]
+    assert score.excluded_members(contestant, population) == {
+        "shipped-3p-low-individual": "holds weights of the scored run"
+    }
+    result = score.score(contestant, [condition], episodes=2, seed=0)
+    found = result["conditions"][condition]
+    assert "shipped-3p-low-individual" not in found["members"] and found["excluded"]
+    # the hierarchical reference of each condition is its own run: nothing of another condition is excluded
+    assert score.excluded_members(score.resolve("pretrained", "predator"), population) == {}
+
+
+# ------------------------------------------------------------------ the statistics
+
+
+def _capture_like(rng: np.random.Generator, m: int, e: int) -> np.ndarray:
+    p = expit(rng.normal(0, 1, (m, 1)) + rng.normal(0, 1, (1, e)))
+    return (rng.random((m, e)) < p) * 1.0 - 0.3 * rng.random((m, e))
+
+
+@pytest.mark.parametrize("members", [4, 13])
+def test_the_interval_covers_what_it_claims(members: int) -> None:
+    """Members and episodes random, returns like the game's (a capture or not, a cost): the 95 %
+    interval holds the true mean 0.35 in 95 % ± 2 points of 1500 simulated tables of its own draws."""
+    held = score.coverage(_capture_like, 0.5 - 0.15, members, 20, draws=1500, seed=members + 7)
+    assert 0.93 <= held <= 0.97, held
+
+
+def test_the_interval_reduces_to_the_t_interval_for_one_member_and_grows_with_the_members_spread() -> None:
+    rng = np.random.default_rng(0)
+    y = rng.normal(size=(1, 30))
+    mean, sd = y.mean(), y.std(ddof=1) / np.sqrt(30)
+    assert score.crossed_interval(y)["ci"] == pytest.approx(list(stats.t.interval(0.95, 29, mean, sd)))
+    close = rng.normal(size=(4, 30)) * 0.1
+    apart = close + np.array([[-1.0], [0.0], [1.0], [2.0]])
+    assert np.diff(score.crossed_interval(apart)["ci"])[0] > 5 * np.diff(score.crossed_interval(close)["ci"])[0]
+
+
+def test_the_aggregate_is_rliables_interquartile_mean() -> None:
+    values = np.array([0.1, 0.9, 0.5, -0.2, 1.3, 0.7, 0.6, 0.2, 0.95, 0.4])
+    middle = np.sort(values)[2:8]  # 10 conditions: the lowest and highest two left out
+    assert score.iqm(values) == pytest.approx(middle.mean()) == pytest.approx(stats.trim_mean(values, 0.25))
+    rng = np.random.default_rng(1)
+    cells = {
+        f"c{j}": (rng.normal(0.5 + j / 10, 0.1, (3, 8)), rng.normal(0.0, 0.1, (3, 8)), rng.normal(1.0, 0.1, (3, 8)))
+        for j in range(5)
+    }
+    result = score.aggregate(cells, seed=3, resamples=400)
+    assert result["ci"][0] < result["iqm"] < result["ci"][1]
+    assert score.aggregate(cells, seed=3, resamples=400) == result  # seeded
+    flat = np.full((3, 8), -1.0)
+    undefined = score.aggregate({**cells, "same": (flat, flat, flat)}, seed=3, resamples=400)
+    assert undefined["undefined"] == ["same"] and undefined["iqm"] == result["iqm"]
+
+
+# ------------------------------------------------------------------ the command
+
+
+def test_a_hand_written_agent_is_scored_in_one_command(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "pursuer.py").write_text(
+        "import numpy as np\n\nclass P:\n    def act_batch(self, obs):\n"
+        "        return np.tile([1, 0], (len(obs), 1))\n\ndef make():\n    return P()\n"
+    )
+    code, output = run_cli(
+        "score",
+        "pursuer:make",
+        "--role",
+        "predator",
+        "--conditions",
+        "3p-low-shared",
+        "--episodes",
+        "3",
+        "--out",
+        "out",
+    )
+    assert code == 0, output
+    assert "PROVISIONAL" in output and "a team of copies" in output
+    result = json.loads((tmp_path / "out" / "score.json").read_text())
+    assert list(result["conditions"]["3p-low-shared"]["per_slot"]) == ["predator_0", "predator_1", "predator_2"]
+    assert "PROVISIONAL" in (tmp_path / "out" / "score.md").read_text()
+    sys.modules.pop("pursuer", None)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["nowhere_module:make", "--role", "predator"], "cannot import 'nowhere_module'"),
+        (["FleeingPrey", "--role", "predator"], "FleeingPrey is a prey: it cannot play --role predator"),
+        (["prey_only:make", "--role", "predator"], "cannot play --role predator in 1p-low"),
+        (["random", "--role", "predator", "--conditions", "9p-nowhere"], "--conditions '9p-nowhere': expected"),
+        (["pretrained:1p-high", "--role", "predator", "--conditions", "2p-low-shared"], "cannot play 2p-low-shared"),
+        (["random", "--role", "predator", "--population", "nobody"], "no population 'nobody'"),
+    ],
+)
+def test_bad_input_is_refused_in_one_line_and_writes_nothing(
+    args: list[str], message: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "prey_only.py").write_text(
+        "class R:\n    def act(self, o):\n        return 3\n\ndef make():\n    return R()\n"
+    )
+    code, output = run_cli("score", *args, "--episodes", "2", "--out", "out")
+    assert code == 2, output
+    assert message in output and len(output.strip().splitlines()) == 1, output
+    assert not (tmp_path / "out").exists()
+    sys.modules.pop("prey_only", None)
+
+
+# ------------------------------------------------------------------ the leaderboard
+
+
+def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:
+    spec = importlib.util.spec_from_file_location("leaderboard", ROOT / "scripts" / "leaderboard.py")
+    assert spec is not None and spec.loader is not None
+    leaderboard = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(leaderboard)
+    page = (ROOT / "docs" / "leaderboard.md").read_text()
+    assert leaderboard.render(page) == page
+    rows = json.loads((ROOT / "results" / "score" / "rows.json").read_text())
+    for row in rows:
+        result = json.loads((ROOT / "results" / "score" / row["file"]).read_text())
+        assert row["command"].startswith("pursuit-bench score ") and f"--role {result['role']}" in row["command"]
+        assert f"--episodes {result['episodes']} --seed {result['seed']}" in row["command"]
