@@ -38,7 +38,7 @@ from pursuit_bench.env.task import obs_size
 from pursuit_bench.pretrained import populations
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey, PurePursuitPredator
 from pursuit_bench.training import runs
-from pursuit_bench.training.evaluate import run_episodes
+from pursuit_bench.training.evaluate import PROTOCOL, play_variants
 
 CONFIDENCE = 0.95
 RESAMPLES = 2000
@@ -385,13 +385,10 @@ def play(
     agents = {**member.agents(condition, slots(condition, other)), **contestant.make(condition, seed)}
     agents = {name: agents[name] for name in CONDITIONS[condition].agent_names}
 
-    def heard(obs: np.ndarray, actions: np.ndarray, done: np.ndarray) -> None:
-        if done.any():
-            on_episodes(int(done.sum()))
-
-    played = run_episodes(
-        condition, agents, episodes, seed=seed, num_envs=num_envs, epsilons=_epsilons(agents), on_step=heard
-    )
+    # the evaluation protocol's own player: every episode played to its end, the learned opponents'
+    # exploration drawn by (seed, episode, agent), so every contestant meets the same opponent noise
+    (played,) = play_variants(condition, [(agents, _epsilons(agents))], episodes, seed=seed, num_envs=num_envs)
+    on_episodes(episodes)
     index = [list(agents).index(name) for name in slots(condition, role)]
     return np.asarray(played.returns[:, index], dtype=float)
 
@@ -482,7 +479,9 @@ def score(
         "episodes": episodes,
         "seed": seed,
         "protocol": "predators greedy; a learned prey of ours ε-greedy with ε = 0.1 (the paper's section 3.4); "
-        "agent modules act as they are; every member and every agent plays the episodes the seed fixes",
+        "agent modules act as they are; every member and every agent plays the episodes the seed fixes, each to its "
+        "end, with common random numbers",
+        "draws": PROTOCOL,
         "interval": "95 % crossed random-effects interval (members and episodes random; ANOVA components, "
         "Satterthwaite df); docs/leaderboard.md",
         "normalization": "(agent − random) / (reference − random): 0 = uniformly random agent, 1 = the condition's "
