@@ -76,7 +76,8 @@ for seed, run in zip(seeds, trainer.runs):
 print(json.dumps({"train_seconds": train_seconds, "runs": runs}))
 """
 
-#: ``python -c TIMER EPISODES``: seconds to train one run of 1p-high alone to EPISODES.
+#: ``python -c TIMER EPISODES``: seconds (wall and this process's CPU) to train one run of 1p-high
+#: alone to EPISODES.
 TIMER = r"""
 import json, sys, time
 import torch
@@ -85,9 +86,10 @@ from pursuit_bench.agents.config import REPRODUCTION
 from pursuit_bench.training.train import TrainConfig, Trainer
 episodes = int(sys.argv[1])
 trainer = Trainer(TrainConfig(condition="1p-high", agent=REPRODUCTION, num_envs=32, seed=0, episodes=episodes))
-start = time.perf_counter()
+start, cpu = time.perf_counter(), time.process_time()
 trainer.run()
-print(json.dumps({"seconds": time.perf_counter() - start, "env_steps": trainer.runs[0].env_steps}))
+seconds, cpu_seconds = time.perf_counter() - start, time.process_time() - cpu
+print(json.dumps({"seconds": seconds, "cpu_seconds": cpu_seconds, "env_steps": trainer.runs[0].env_steps}))
 """
 
 
@@ -158,8 +160,9 @@ def main() -> None:
         try:
             trees = {"ours": ROOT, "reference": reference}
             if args.time_only:
-                for name, tree in trees.items():
-                    print(name, in_tree(tree, TIMER, str(args.episodes)), flush=True)
+                timed = {name: in_tree(tree, TIMER, str(args.episodes)) for name, tree in trees.items()}
+                write_json(OUT / "equivalence-run-time.json", {"episodes": args.episodes, **timed})
+                print(json.dumps(timed))
                 return
             run_units(args, trees)
         finally:
