@@ -3,11 +3,15 @@ run: the reference is a git worktree of commit ``--reference`` (default ``8ec03b
 commit before it), imported in its own processes beside ours, repeats interleaved.
 
     python benchmarks/bench_speed.py [--repeats 3] [--episodes 1000] [--reference 8ec03b5]
+        [--sections train,parts,stacked,update,eval]
 
 Prints, each as a median of ``--repeats`` and as today / reference:
 
 - transitions/s (arena-steps of one run, every agent learning) of one run at the ``reproduction``
   preset (32 arenas, one update per env step) in 1p-high and in 3p-high-shared;
+- (``parts``) the milliseconds of one such env step in each of its parts (env step, acting,
+  replay sampling and priorities, storing, the update, the rest of the loop), both builds, timed
+  by wrapping the calls each part is made of, by name (a name a build lacks is skipped);
 - 10 seeds of 1p-high stacked in one process, and the ratio to one run alone (one after another,
   10 runs take 10 times one): ours against ours, and ours stacked against the reference alone;
 - one member-update (batch 64, the prey-sized network, replay filled) at 1 and 24 members, in ms
