@@ -301,8 +301,8 @@ def _store(
     new_terminated,
 ):
     """Write k transitions per member (``new_…``, each (M, k, …)) into the slots from ``position``
-    on (wrapping), each at its member's largest priority so far, and update the trees: what
-    ``_set_priorities`` does, one slot at a time."""
+    on (wrapping), each at its member's largest priority so far, and update the trees (each
+    touched parent recomputed from its children, as :func:`_tree_set` does)."""
     members, k = new_actions.shape
     capacity = actions.shape[1]
     for m in range(members):
@@ -433,12 +433,6 @@ class ReplayStack:
         )
         self.position = int((self.position + k) % self.capacity)
         self.size = min(self.size + k, self.capacity)
-
-    def _set_priorities(self, slots: np.ndarray, priorities: np.ndarray) -> None:
-        """Every member's slots (M, k) to these priorities (M, k): a slot given twice keeps its last."""
-        rows = np.arange(self.members)[:, None]
-        self.priorities[rows, slots] = priorities
-        _tree_set(self.tree, self.leaves, slots, self.priorities[rows, slots] ** self.alpha)
 
     def sample(self, batch_size: int, beta: float, rngs: list[np.random.Generator]) -> Batch:
         """``batch_size`` transitions per member (with replacement), member m drawing from
