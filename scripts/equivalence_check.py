@@ -6,6 +6,7 @@ within ±``--margin`` (0.05).
 
     python scripts/equivalence_check.py [--seeds 10] [--episodes 15000] [--eval-episodes 1000]
     python scripts/equivalence_check.py --time-only     # one run's training time, both builds
+    python scripts/equivalence_check.py --bits 1500     # both builds' learners, bit for bit, after 1500 steps
 
 Each unit of work (a build and a chunk of ``--stack`` seeds, trained stacked in one process:
 stacked runs learn exactly as alone, ``tests/test_stacking.py``) writes its results to
@@ -93,6 +94,27 @@ print(json.dumps({"seconds": seconds, "cpu_seconds": cpu_seconds, "env_steps": t
 """
 
 
+#: ``python -c BITS CONDITION STEPS``: a SHA-256 of every learner's parameters and priorities after
+#: STEPS env steps of one run (seed 3), with its episode count and last losses.
+BITS = r"""
+import hashlib, json, sys
+import torch
+torch.set_num_threads(1)
+from pursuit_bench.agents.config import REPRODUCTION
+from pursuit_bench.training.train import TrainConfig, Trainer
+condition, steps = sys.argv[1], int(sys.argv[2])
+trainer = Trainer(TrainConfig(condition=condition, agent=REPRODUCTION, num_envs=32, seed=3, episodes=10**9))
+for _ in range(steps):
+    trainer.step()
+digest = hashlib.sha256()
+for group in trainer.groups:
+    digest.update(group.learner.optimizer.flat.numpy().tobytes())
+    digest.update(group.learner.replay.priorities.tobytes())
+run = trainer.runs[0]
+print(json.dumps({"sha256": digest.hexdigest(), "episodes": run.episodes_done, "losses": run.last_losses}))
+"""
+
+
 def in_tree(tree: Path, code: str, *args: str) -> dict:
     """Run ``code`` with ``tree``'s pursuit_bench first on the path; its last line, as JSON."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
@@ -151,6 +173,9 @@ def main() -> None:
     parser.add_argument("--margin", type=float, default=0.05)
     parser.add_argument("--reference", default="7a7c4df", help="the commit measured against")
     parser.add_argument("--time-only", action="store_true", help="time one run of each build, nothing else")
+    parser.add_argument(
+        "--bits", type=int, metavar="STEPS", help="compare both builds' learners bit for bit after STEPS env steps"
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch:
         reference = Path(scratch) / "reference"
@@ -159,6 +184,14 @@ def main() -> None:
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # the worktree goes whatever happens
         try:
             trees = {"ours": ROOT, "reference": reference}
+            if args.bits:
+                compared = {
+                    condition: {name: in_tree(tree, BITS, condition, str(args.bits)) for name, tree in trees.items()}
+                    for condition in ("1p-high", "3p-high-shared")
+                }
+                write_json(OUT / "equivalence-bits.json", {"steps": args.bits, "seed": 3, **compared})
+                print(json.dumps(compared))
+                return
             if args.time_only:
                 timed = {name: in_tree(tree, TIMER, str(args.episodes)) for name, tree in trees.items()}
                 write_json(OUT / "equivalence-run-time.json", {"episodes": args.episodes, **timed})

@@ -54,7 +54,8 @@ def parallel_navigation(observations: np.ndarray, modes: np.ndarray | int) -> np
     if modes.shape != shape:
         modes = np.broadcast_to(modes, shape)
     rows = obs.reshape(-1, obs.shape[-1])
-    return _parallel_navigation(rows, modes.reshape(-1), _DIRS, APPROACH_DIRECTIONS, *_PHYSICS).reshape(shape)
+    directions = _parallel_navigation(rows, modes.reshape(-1), _DIRS, APPROACH_DIRECTIONS, *_PHYSICS).reshape(shape)
+    return directions[()] if not shape else directions  # one observation: a scalar, as numpy indexing gives
 
 
 @numba.njit(cache=True)
