@@ -3,11 +3,15 @@ run: the reference is a git worktree of commit ``--reference`` (default ``8ec03b
 commit before it), imported in its own processes beside ours, repeats interleaved.
 
     python benchmarks/bench_speed.py [--repeats 3] [--episodes 1000] [--reference 8ec03b5]
+        [--sections train,parts,stacked,update,eval]
 
 Prints, each as a median of ``--repeats`` and as today / reference:
 
 - transitions/s (arena-steps of one run, every agent learning) of one run at the ``reproduction``
   preset (32 arenas, one update per env step) in 1p-high and in 3p-high-shared;
+- (``parts``) the milliseconds of one such env step in each of its parts (env step, acting,
+  replay sampling and priorities, storing, the update, the rest of the loop), both builds, timed
+  by wrapping the calls each part is made of, by name (a name a build lacks is skipped);
 - 10 seeds of 1p-high stacked in one process, and the ratio to one run alone (one after another,
   10 runs take 10 times one): ours against ours, and ours stacked against the reference alone;
 - one member-update (batch 64, the prey-sized network, replay filled) at 1 and 24 members, in ms
@@ -84,8 +88,69 @@ def matmul_rate():
         torch.mm(a, a)
     return 200 * 2 * 256**3 / (time.perf_counter() - start)
 
+PARTS = {  # part -> (module, owner, attribute) of the calls timed as that part, exclusive of nested ones
+    "env step": [("pursuit_bench.env.vector", "VectorPursuitEnv", "step")],
+    "acting": [
+        ("pursuit_bench.agents.dqn", "DQNLearner", "act_values"),
+        ("pursuit_bench.agents.dqn", "DQNLearner", "choose"),
+        ("pursuit_bench.agents.dqn", "DQNLearner", "act_members"),
+        ("pursuit_bench.training.train", None, "members_to_env"),
+        ("pursuit_bench.training.train", None, "put_actions"),
+        ("pursuit_bench.agents.kinds", "ScriptedAgent", "act_batch"),
+    ],
+    "replay sampling + priorities": [
+        ("pursuit_bench.agents.replay", "ReplayStack", "sample"),
+        ("pursuit_bench.agents.replay", "ReplayStack", "update_priorities"),
+    ],
+    "storing": [("pursuit_bench.agents.dqn", "DQNLearner", "store")],
+    "update": [("pursuit_bench.agents.dqn", "DQNLearner", "learn"), ("pursuit_bench.agents.adam", "FlatAdam", "step")],
+}
+
+def step_parts(condition, steps):
+    # milliseconds per env step of one run in each part (exclusive of the parts it calls), and the
+    # rest of Trainer.step (the loop's own Python: gathering rows, counting episodes)
+    import importlib
+    spent = {part: 0.0 for part in PARTS}
+    stack = []  # [part, start, time spent in nested timed calls]
+
+    def timed(part, function):
+        def wrapper(*a, **k):
+            stack.append([part, time.perf_counter(), 0.0])
+            try:
+                return function(*a, **k)
+            finally:
+                _, start, nested = stack.pop()
+                elapsed = time.perf_counter() - start
+                spent[part] += elapsed - nested
+                if stack:
+                    stack[-1][2] += elapsed
+        return wrapper
+
+    for part, places in PARTS.items():
+        for module, owner, name in places:
+            holder = importlib.import_module(module)
+            holder = getattr(holder, owner) if owner else holder
+            if hasattr(holder, name):
+                setattr(holder, name, timed(part, getattr(holder, name)))
+    configs = [TrainConfig(condition=condition, agent=AGENT, num_envs=32, seed=0, episodes=10**9)]
+    trainer = Trainer(configs)
+    while trainer.groups[0].learner.steps < AGENT.learning_starts + 32:
+        trainer.step()
+    for part in spent:
+        spent[part] = 0.0
+    start = time.perf_counter()
+    for _ in range(steps):
+        trainer.step()
+    total = time.perf_counter() - start
+    out = {part: 1e3 * seconds / steps for part, seconds in spent.items()}
+    out["rest of the loop"] = 1e3 * (total - sum(spent.values())) / steps
+    out["total"] = 1e3 * total / steps
+    return out
+
 if kind == "train":
     print(json.dumps(transitions_per_second(args[0], int(args[1]), int(args[2]))))
+elif kind == "parts":
+    print(json.dumps(step_parts(args[0], int(args[1]))))
 elif kind == "update":
     print(json.dumps({"seconds": member_update_seconds(int(args[0])), "matmul": matmul_rate()}))
 elif kind == "eval":
@@ -122,13 +187,26 @@ def medians(trees: dict[str, Path], repeats: int, *args: str) -> dict[str, list[
     return answers
 
 
+#: What the benchmark can measure (``--sections``).
+SECTIONS = ("train", "parts", "stacked", "update", "eval")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--episodes", type=int, default=1000, help="evaluation episodes per variant")
     parser.add_argument("--steps", type=int, default=150, help="env steps timed per training measurement")
     parser.add_argument("--reference", default="8ec03b5", help="the commit measured against")
+    parser.add_argument(
+        "--sections",
+        default=",".join(SECTIONS),
+        help=f"what to measure, comma-separated among {', '.join(SECTIONS)} (default: all)",
+    )
     args = parser.parse_args()
+    args.sections = args.sections.split(",")
+    unknown = set(args.sections) - set(SECTIONS)
+    if unknown:
+        parser.error(f"--sections: unknown {', '.join(sorted(unknown))}; expected some of {', '.join(SECTIONS)}")
     with tempfile.TemporaryDirectory() as scratch:
         reference = Path(scratch) / "reference"
         add = ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(reference), args.reference]
@@ -144,19 +222,50 @@ def report(args: argparse.Namespace, trees: dict[str, Path]) -> None:
     print(f"today: {ROOT}; reference: commit {args.reference}; medians of {args.repeats}, one torch thread")
     med = statistics.median
     alone = {}
-    for condition in ("1p-high", "3p-high-shared"):
+    for condition in ("1p-high", "3p-high-shared") if "train" in args.sections else ():
         alone[condition] = rates = medians(trees, args.repeats, "train", condition, "1", str(args.steps))
         today, before = med(rates["today"]), med(rates["reference"])  # type: ignore[type-var]
         print(
             f"one run, {condition}, reproduction preset: {today:,.0f} transitions/s "
             f"against {before:,.0f}: {today / before:.2f}x"
         )
+    for condition in ("1p-high", "3p-high-shared") if "parts" in args.sections else ():
+        parts_table(condition, medians(trees, args.repeats, "parts", condition, str(args.steps)))
+    if "stacked" in args.sections:
+        stacked_runs(args, trees, alone)
+    if "update" in args.sections:
+        member_updates(args, trees)
+    if "eval" in args.sections:
+        evaluation(args, trees)
+
+
+def parts_table(condition: str, answers: dict[str, list[object]]) -> None:
+    """Milliseconds per env step of one run in each part of the step, medians of the repeats."""
+    print(f"\nper part of one env step, {condition}, one run, reproduction preset (ms, median):\n")
+    print("| part | reference | today | reference / today |\n|---|---:|---:|---:|")
+    for part in answers["today"][0]:  # type: ignore[attr-defined]
+        before = statistics.median(a[part] for a in answers["reference"])  # type: ignore[index]
+        today = statistics.median(a[part] for a in answers["today"])  # type: ignore[index]
+        print(f"| {part} | {before:.3f} | {today:.3f} | {before / today:.2f}x |")
+    print()
+
+
+def stacked_runs(args: argparse.Namespace, trees: dict[str, Path], alone: dict[str, dict[str, list[object]]]) -> None:
+    """10 seeds of 1p-high stacked, against one run alone."""
+    med = statistics.median
+    if "1p-high" not in alone:
+        alone["1p-high"] = medians(trees, args.repeats, "train", "1p-high", "1", str(args.steps))
     stacked = medians(trees, args.repeats, "train", "1p-high", "10", str(max(10, args.steps // 5)))
     for name in trees:
         s, a = med(stacked[name]), med(alone["1p-high"][name])  # type: ignore[type-var]
         print(f"10 seeds of 1p-high stacked, {name}: {s:,.0f} transitions/s, {s / a:.2f}x one after another ({a:,.0f})")
     ratio = med(stacked["today"]) / med(alone["1p-high"]["reference"])  # type: ignore[type-var, operator]
     print(f"  today's stack against the reference's runs one after another: {ratio:.2f}x")
+
+
+def member_updates(args: argparse.Namespace, trees: dict[str, Path]) -> None:
+    """One member-update at 1 and 24 members, against its floating-point bound."""
+    med = statistics.median
     from pursuit_bench.env.task import obs_size
 
     bound_flops = member_update_flops(obs_size(2) + 2, 12, 64)  # the worker's learner: 1p, wall features
@@ -169,6 +278,11 @@ def report(args: argparse.Namespace, trees: dict[str, Path]) -> None:
                 f"member-update at {members:2d} members, {name}: "
                 f"{seconds * 1e3:.3f} ms = {seconds / bound:.1f}x its bound"
             )
+
+
+def evaluation(args: argparse.Namespace, trees: dict[str, Path]) -> None:
+    """Evaluation episodes/s of the paper's protocol, and whether the two builds' results agree."""
+    med = statistics.median
     evaluations = medians(trees, args.repeats, "eval", "1p-high", str(args.episodes))
     rates = {name: med(a["episodes_per_s"] for a in evaluations[name]) for name in trees}  # type: ignore[index]
     same = all(a["result"] == evaluations["reference"][0]["result"] for a in evaluations["today"])  # type: ignore[index]

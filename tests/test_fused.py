@@ -154,3 +154,30 @@ def test_the_compiled_passes_refuse_what_would_read_past_a_members_parameters() 
     batch.actions[0, 0] = 12
     with pytest.raises(ValueError, match=r"values in \[0, 12\)"):
         learner.learn(batch)
+
+
+def test_acting_in_one_call_chooses_as_the_forward_pass_and_epsilon_greedy_do() -> None:
+    """``act_members`` (forward pass and ε-greedy in one compiled call) against ``act_values`` and
+    a naive ε-greedy on copies of the members' generators (each member: B uniforms, then B random
+    actions): the same Q-values, values and actions, the generators left in the same state."""
+    config = REPRODUCTION.replace(epsilon_start=0.5, epsilon_end=0.5)
+    learner = DQNLearner(14, 12, config, members=3, seed=[5, 6, 7])
+    copies = [np.random.default_rng(s) for s in (5, 6, 7)]
+    for rng, copy in zip(learner.rngs, copies, strict=True):
+        copy.bit_generator.state = rng.bit_generator.state
+    obs = np.random.default_rng(8).uniform(-1, 1, size=(3, 32, 14)).astype(np.float32)
+    for _ in range(5):
+        chosen, q, value = learner.act_members(obs, explore=True)
+        expected_q, expected_value = learner.act_values(obs)
+        np.testing.assert_array_equal(q, expected_q)
+        np.testing.assert_array_equal(value, expected_value)
+        for m, copy in enumerate(copies):
+            explore, random = copy.random(32) < 0.5, copy.integers(0, 12, size=32)
+            np.testing.assert_array_equal(chosen[m], np.where(explore, random, q[m].argmax(-1)))
+    for rng, copy in zip(learner.rngs, copies, strict=True):
+        assert rng.bit_generator.state == copy.bit_generator.state
+    greedy, q, _ = learner.act_members(obs, explore=False)
+    np.testing.assert_array_equal(greedy, q.argmax(-1))
+    np.testing.assert_array_equal(learner.choose(q, explore=False), greedy)
+    with pytest.raises(ValueError, match="expected"):
+        learner.act_members(obs[:2], explore=True)

@@ -93,3 +93,26 @@ def test_constant_bearing_formula() -> None:
     assert np.isnan(constant_bearing_angle(2.0, 1.0, np.pi / 2))  # too slow to intercept
     with pytest.raises(ValueError, match="pursuer_speed"):
         constant_bearing_angle(1.0, 0.0, 0.3)
+
+
+def test_the_compiled_rule_is_the_rules_numpy_form() -> None:
+    """:func:`parallel_navigation` (compiled, row by row) against the rule written out in numpy
+    over random observations, float32 and float64, one mode for all or one per row."""
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(4, 500, 16))
+    modes = rng.integers(0, 2, size=(4, 500))
+    accel = np.where(modes == 1, task.ACCEL_CHASE, task.ACCEL_STALK)[..., None, None]
+    angles = -task.DIRECTION_STEP * APPROACH_DIRECTIONS
+    dirs = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+    for observations in (obs, obs.astype(np.float32)):
+        o = observations.astype(np.float64)
+        prey_rel = o[..., None, 6:8]
+        line = prey_rel + o[..., None, 8:10] * DT - ((1.0 - DAMPING) * o[..., None, 2:4] + accel * DT * dirs) * DT
+        phi = np.arctan2(prey_rel[..., 1], prey_rel[..., 0])
+        change = np.abs((np.arctan2(line[..., 1], line[..., 0]) - phi + np.pi) % (2 * np.pi) - np.pi)
+        tied = change <= change.min(axis=-1, keepdims=True) + 1e-12
+        expected = APPROACH_DIRECTIONS[np.argmin(np.where(tied, np.hypot(line[..., 0], line[..., 1]), np.inf), -1)]
+        np.testing.assert_array_equal(parallel_navigation(observations, modes), expected)
+        one_mode = parallel_navigation(observations[0, :5], 1)
+        np.testing.assert_array_equal(one_mode, parallel_navigation(observations[0, :5], np.ones(5, dtype=int)))
+        assert [parallel_navigation(observations[0, i], 1) for i in range(5)] == one_mode.tolist()

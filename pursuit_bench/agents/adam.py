@@ -74,6 +74,8 @@ class FlatAdam:
             self.exp_avg.append(self._m[offset : offset + n].view_as(p))
             self.exp_avg_sq.append(self._v[offset : offset + n].view_as(p))
         self.step_count = 0
+        # numpy views of the buffers (never rebound) for the compiled step
+        self._buffers = (self.flat.numpy(), self.grad.numpy(), self._m.numpy(), self._v.numpy())
 
     def zero_grad(self) -> None:
         self.grad.zero_()
@@ -84,10 +86,7 @@ class FlatAdam:
         self.step_count += 1
         f32 = np.float32
         _adam_step(
-            self.flat.numpy(),
-            self.grad.numpy(),
-            self._m.numpy(),
-            self._v.numpy(),
+            *self._buffers,
             f32(1 - beta1),
             f32(beta2),
             f32(1 - beta2),

@@ -19,7 +19,7 @@ import torch.nn.functional as F
 
 from pursuit_bench.agents.adam import FlatAdam, flatten_parameters, parameter_offsets
 from pursuit_bench.agents.config import AgentConfig
-from pursuit_bench.agents.fused import q_and_value_kernel, update_kernel
+from pursuit_bench.agents.fused import act_kernel, choose_kernel, q_and_value_kernel, update_kernel
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, ReplayStack
 
@@ -95,6 +95,9 @@ class DQNLearner:
         self.optimizer = FlatAdam(self.online, lr=config.learning_rate)
         self._target_flat = flatten_parameters(self.target)  # what the compiled update reads
         self._offsets = parameter_offsets(self.online)
+        # numpy views of the flat buffers the kernels read and write (the tensors are never rebound)
+        self._flat, self._grad = self.optimizer.flat.numpy(), self.optimizer.grad.numpy()
+        self._target_np = self._target_flat.numpy()
         self.replay = ReplayStack(
             members,
             config.buffer_size,
@@ -168,13 +171,27 @@ class DQNLearner:
     def choose(self, q_values: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
         """Actions (M, B) from Q-values: greedy, or ε-greedy when ``explore`` (ε from the schedule
         unless ``epsilon`` is given)."""
-        actions = q_values.argmax(axis=-1)
-        if explore:
-            eps = self.epsilon if epsilon is None else epsilon
-            for m, rng in enumerate(self.rngs):
-                random = rng.random(actions.shape[1:]) < eps
-                actions[m] = np.where(random, rng.integers(0, self.n_actions, size=actions.shape[1:]), actions[m])
-        return actions
+        q = np.ascontiguousarray(q_values)
+        return choose_kernel(q, *self._exploration(q.shape[1], explore, epsilon))
+
+    def _exploration(self, rows: int, explore: bool, epsilon: float | None) -> tuple[np.ndarray, np.ndarray, float]:
+        """The draws of ε-greedy for ``rows`` choices per member: member m's uniforms, then its
+        random actions, both from its own generator; empty arrays when not ``explore``."""
+        if not explore:
+            return np.empty((self.members, 0)), np.empty((self.members, 0), dtype=np.int64), 0.0
+        uniforms = np.empty((self.members, rows))
+        randoms = np.empty((self.members, rows), dtype=np.int64)
+        for m, rng in enumerate(self.rngs):
+            uniforms[m] = rng.random(rows)
+            randoms[m] = rng.integers(0, self.n_actions, size=rows)
+        return uniforms, randoms, self.epsilon if epsilon is None else epsilon
+
+    def act_members(self, obs: np.ndarray, *, explore: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Actions (M, B), Q-values (M, B, A) and V(s) (M, B) for observations (M, B, n_obs): the
+        training loop's acting step, :meth:`act_values` and :meth:`choose` in one compiled call."""
+        obs = self._checked(np.ascontiguousarray(obs, dtype=np.float32), "obs")
+        draws = self._exploration(obs.shape[1], explore, None)
+        return act_kernel(self._flat, self._offsets, self.n_actions, obs, self.config.wall_features, *draws)
 
     def act(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
         """Actions (M, B) for observations (M, B, n_obs); see :meth:`choose`."""
@@ -218,9 +235,9 @@ class DQNLearner:
         ):
             raise ValueError(f"batch.actions: expected shape {batch.obs.shape[:2]} and values in [0, {self.n_actions})")
         losses, td = update_kernel(
-            self.optimizer.flat.numpy(),
-            self._target_flat.numpy(),
-            self.optimizer.grad.numpy(),
+            self._flat,
+            self._target_np,
+            self._grad,
             self._offsets,
             self.n_actions,
             np.ascontiguousarray(batch.obs, dtype=np.float32),
@@ -242,9 +259,8 @@ class DQNLearner:
         """Q-values (M, B, A) and V(s) (M, B) for observations (M, B, n_obs) by the compiled
         forward pass the training loop acts with: :meth:`evaluate`'s to float rounding (the
         evaluations use that one, torch's, whose numbers the committed results hold)."""
-        flat = self.optimizer.flat.numpy()
         obs = self._checked(np.ascontiguousarray(obs, dtype=np.float32), "obs")
-        return q_and_value_kernel(flat, self._offsets, self.n_actions, obs, self.config.wall_features)
+        return q_and_value_kernel(self._flat, self._offsets, self.n_actions, obs, self.config.wall_features)
 
     def loss(self, batch: Batch) -> tuple[torch.Tensor, torch.Tensor]:
         """Per-member losses (M,) and TD errors (M, B): the Huber loss of ``Q(s, a) - y``

@@ -151,6 +151,32 @@ def q_and_value_kernel(flat, offsets, n_actions, obs, wall, first=0):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def choose_kernel(q, uniforms, randoms, epsilon):
+    """Actions (M, B) from Q-values (M, B, A): each row's first largest Q, or where
+    ``uniforms[m, b] < epsilon`` the action ``randoms[m, b]`` (ε-greedy: the draws come from the
+    members' generators, made by the caller; ``uniforms`` of width 0 for greedy choices)."""
+    members, rows, n_actions = q.shape
+    explore = uniforms.shape[1] > 0
+    choices = np.empty((members, rows), dtype=np.int64)
+    for m in range(members):
+        for i in range(rows):
+            best = 0
+            for j in range(1, n_actions):
+                if q[m, i, j] > q[m, i, best]:
+                    best = j
+            choices[m, i] = randoms[m, i] if explore and uniforms[m, i] < epsilon else best
+    return choices
+
+
+@numba.njit(cache=True, error_model="numpy")
+def act_kernel(flat, offsets, n_actions, obs, wall, uniforms, randoms, epsilon):
+    """:func:`q_and_value_kernel` for every member, then :func:`choose_kernel`: the actions
+    (M, B), Q-values (M, B, A) and V(s) (M, B) of one acting step."""
+    q, value = q_and_value_kernel(flat, offsets, n_actions, obs, wall)
+    return choose_kernel(q, uniforms, randoms, epsilon), q, value
+
+
+@numba.njit(cache=True, error_model="numpy")
 def _backward_dense(x, grad_out, w, grad_w, grad_b):
     """Write ``x.T @ grad_out`` into grad_w and the column sums into grad_b; the input's gradient."""
     grad_w[:, :] = np.dot(x.T, grad_out)

@@ -9,8 +9,9 @@ fastest at the paper's capacity 1e4, and a sum tree for large capacities. Both r
 from the stored priorities (the tree from its children), so nothing drifts with time.
 
 :class:`ReplayStack` holds the replays of every member of a stacked learner in one array with a
-member axis: one sum tree per member, stacked, drawn from and updated by one compiled call for all
-members (O(log n) a draw, where the cumulative sum is O(n) an update); the learners use it, and
+member axis: one sum tree per member, stacked (O(log n) a draw, where the cumulative sum is O(n)
+an update). Storing, sampling (the draws, the importance weights and the gathered transitions)
+and the priority updates are one compiled call each for all members; the learners use it, and
 it is tested to draw exactly as one :class:`PrioritizedReplay` with the tree sampler per member.
 """
 
@@ -269,6 +270,104 @@ def _tree_draw(tree, leaves, fractions):
     return picks
 
 
+@numba.njit(cache=True)
+def _tree_set_one(tree, leaves, m, slot, value):
+    """Leaf ``slot`` of member m's tree to ``value``, and its ancestors recomputed from their children."""
+    node = leaves + slot
+    tree[m, node] = value
+    node //= 2
+    while node >= 1:
+        tree[m, node] = tree[m, 2 * node] + tree[m, 2 * node + 1]
+        node //= 2
+
+
+@numba.njit(cache=True)
+def _store(
+    obs,
+    actions,
+    rewards,
+    next_obs,
+    terminated,
+    priorities,
+    tree,
+    leaves,
+    alpha,
+    max_priority,
+    position,
+    new_obs,
+    new_actions,
+    new_rewards,
+    new_next,
+    new_terminated,
+):
+    """Write k transitions per member (``new_…``, each (M, k, …)) into the slots from ``position``
+    on (wrapping), each at its member's largest priority so far, and update the trees (each
+    touched parent recomputed from its children, as :func:`_tree_set` does)."""
+    members, k = new_actions.shape
+    capacity = actions.shape[1]
+    for m in range(members):
+        scaled = max_priority[m] ** alpha
+        for j in range(k):
+            slot = (position + j) % capacity
+            obs[m, slot] = new_obs[m, j]
+            next_obs[m, slot] = new_next[m, j]
+            actions[m, slot] = new_actions[m, j]
+            rewards[m, slot] = new_rewards[m, j]
+            terminated[m, slot] = new_terminated[m, j]
+            priorities[m, slot] = max_priority[m]
+            _tree_set_one(tree, leaves, m, slot, scaled)
+
+
+@numba.njit(cache=True)
+def _sample(tree, leaves, size, beta, fractions, uniform, obs, actions, rewards, next_obs, terminated):
+    """Indices (M, B), importance weights (M, B) and the transitions at those indices.
+
+    Prioritized (``fractions`` (M, B) uniform in [0, 1)): the descent of :func:`_tree_draw`, and
+    weights ``(size · P(i))^-β`` over the member's largest. Uniform (``fractions`` empty): the
+    indices ``uniform`` (M, B) and unit weights."""
+    prioritized = fractions.shape[1] > 0
+    indices = _tree_draw(tree, leaves, fractions) if prioritized else uniform.copy()
+    members, batch = indices.shape
+    weights = np.ones((members, batch), dtype=np.float32)
+    out_obs = np.empty((members, batch, obs.shape[2]), dtype=obs.dtype)
+    out_next = np.empty((members, batch, obs.shape[2]), dtype=obs.dtype)
+    out_actions = np.empty((members, batch), dtype=actions.dtype)
+    out_rewards = np.empty((members, batch), dtype=rewards.dtype)
+    out_terminated = np.empty((members, batch), dtype=terminated.dtype)
+    w = np.empty(batch)
+    for m in range(members):
+        if prioritized:
+            largest = 0.0
+            for i in range(batch):
+                w[i] = (size * (tree[m, indices[m, i] + leaves] / tree[m, 1])) ** -beta
+                largest = max(largest, w[i])
+            for i in range(batch):
+                weights[m, i] = w[i] / largest
+        for i in range(batch):
+            slot = indices[m, i]
+            out_obs[m, i] = obs[m, slot]
+            out_next[m, i] = next_obs[m, slot]
+            out_actions[m, i] = actions[m, slot]
+            out_rewards[m, i] = rewards[m, slot]
+            out_terminated[m, i] = terminated[m, slot]
+    return indices, weights, out_obs, out_actions, out_rewards, out_next, out_terminated
+
+
+@numba.njit(cache=True)
+def _update_priorities(priorities, tree, leaves, alpha, epsilon, max_priority, indices, td_errors):
+    """Member m's slots ``indices[m]`` to priorities ``|δ| + ε`` (in order: a slot drawn twice
+    keeps its last), the trees updated and each member's largest priority raised."""
+    members, batch = indices.shape
+    for m in range(members):
+        largest = max_priority[m]
+        for i in range(batch):
+            priority = abs(np.float64(td_errors[m, i])) + epsilon
+            priorities[m, indices[m, i]] = priority
+            _tree_set_one(tree, leaves, m, indices[m, i], priority**alpha)
+            largest = max(largest, priority)
+        max_priority[m] = largest
+
+
 class ReplayStack:
     """M prioritized replays, one per member of a stacked learner, their arrays stacked on a
     member axis so that sampling and priority updates are one call for all members.
@@ -314,62 +413,59 @@ class ReplayStack:
     ) -> None:
         """Store k transitions per member (arrays (M, k, …)) at each member's largest priority."""
         k = actions.shape[1]
-        slots = (self.position + np.arange(k)) % self.capacity
-        self.obs[:, slots] = obs
-        self.actions[:, slots] = actions
-        self.rewards[:, slots] = rewards
-        self.next_obs[:, slots] = next_obs
-        self.terminated[:, slots] = terminated
-        self._set_priorities(
-            np.repeat(slots[None, :], self.members, axis=0), np.repeat(self.max_priority[:, None], k, axis=1)
+        _store(
+            self.obs,
+            self.actions,
+            self.rewards,
+            self.next_obs,
+            self.terminated,
+            self.priorities,
+            self.tree,
+            self.leaves,
+            self.alpha,
+            self.max_priority,
+            self.position,
+            np.asarray(obs),
+            np.asarray(actions),
+            np.asarray(rewards),
+            np.asarray(next_obs),
+            np.asarray(terminated),
         )
         self.position = int((self.position + k) % self.capacity)
         self.size = min(self.size + k, self.capacity)
-
-    def _set_priorities(self, slots: np.ndarray, priorities: np.ndarray) -> None:
-        """Every member's slots (M, k) to these priorities (M, k): a slot given twice keeps its last."""
-        rows = np.arange(self.members)[:, None]
-        self.priorities[rows, slots] = priorities
-        _tree_set(self.tree, self.leaves, slots, self.priorities[rows, slots] ** self.alpha)
 
     def sample(self, batch_size: int, beta: float, rngs: list[np.random.Generator]) -> Batch:
         """``batch_size`` transitions per member (with replacement), member m drawing from
         ``rngs[m]``; every array of the batch has the member axis first, (M, B, …)."""
         if self.size == 0:
             raise ValueError("sample() from an empty replay: add transitions first")
-        n, m_all = self.size, np.arange(self.members)[:, None]
         if not self.prioritized:
-            indices = np.stack([rng.integers(0, n, size=batch_size) for rng in rngs])
-            weights = np.ones((self.members, batch_size), dtype=np.float32)
+            uniform = np.stack([rng.integers(0, self.size, size=batch_size) for rng in rngs])
+            fractions = np.empty((self.members, 0))
         else:
+            uniform = np.empty((self.members, 0), dtype=np.int64)
             fractions = np.stack([rng.random(batch_size) for rng in rngs])
-            indices = _tree_draw(self.tree, self.leaves, fractions)
-            probabilities = self.tree[m_all, indices + self.leaves] / self.tree[:, 1:2]
-            w = (n * probabilities) ** -beta
-            weights = (w / w.max(axis=1, keepdims=True)).astype(np.float32)
-        flat = (indices + m_all * self.capacity).ravel()  # one take per array: faster than 2-D indexing
-
-        def taken(array: np.ndarray) -> np.ndarray:
-            rows = array.reshape(self.members * self.capacity, *array.shape[2:])
-            return np.take(rows, flat, axis=0).reshape(*indices.shape, *array.shape[2:])
-
-        return Batch(
-            indices=indices,
-            obs=taken(self.obs),
-            actions=taken(self.actions),
-            rewards=taken(self.rewards),
-            next_obs=taken(self.next_obs),
-            terminated=taken(self.terminated),
-            weights=weights,
+        arrays = self.obs, self.actions, self.rewards, self.next_obs, self.terminated
+        indices, weights, obs, actions, rewards, next_obs, terminated = _sample(
+            self.tree, self.leaves, self.size, beta, fractions, uniform, *arrays
         )
+        return Batch(indices, obs, actions, rewards, next_obs, terminated, weights)
 
     def update_priorities(self, indices: np.ndarray, td_errors: np.ndarray) -> None:
-        """Set the priorities of sampled transitions (M, B) to ``|δ| + ε``."""
+        """Set the priorities of sampled transitions (M, B) to ``|δ| + ε`` (a slot drawn twice
+        keeps its last value)."""
         if not self.prioritized:
             return
-        priorities = np.abs(np.asarray(td_errors, dtype=np.float64)) + self.priority_epsilon
-        self._set_priorities(np.asarray(indices), priorities)  # a slot drawn twice keeps its last value
-        self.max_priority = np.maximum(self.max_priority, priorities.max(axis=1))
+        _update_priorities(
+            self.priorities,
+            self.tree,
+            self.leaves,
+            self.alpha,
+            self.priority_epsilon,
+            self.max_priority,
+            np.asarray(indices, dtype=np.int64),
+            np.asarray(td_errors),
+        )
 
     def member_state(self, m: int) -> dict[str, Any]:
         """Member m's replay as :meth:`PrioritizedReplay.state_dict` writes it."""

@@ -15,6 +15,7 @@ position (u, v), prey velocity (u, v), …]`` in the predator's line-of-sight (L
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from pursuit_bench.env.obstacles import RANGE_CAP
@@ -34,10 +35,7 @@ _PREY_REL = slice(6, 8)
 _PREY_VEL = slice(8, 10)
 _ANGLES = -DIRECTION_STEP * APPROACH_DIRECTIONS
 _DIRS = np.stack([np.cos(_ANGLES), np.sin(_ANGLES)], axis=-1)  # (7, 2) in the LOS frame
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    return (angle + np.pi) % (2 * np.pi) - np.pi
+_PHYSICS = (CHASE, ACCEL_STALK, ACCEL_CHASE, DAMPING, DT)
 
 
 def parallel_navigation(observations: np.ndarray, modes: np.ndarray | int) -> np.ndarray:
@@ -48,21 +46,45 @@ def parallel_navigation(observations: np.ndarray, modes: np.ndarray | int) -> np
     the world's dynamics, the prey's from its current velocity. Ties go to the smaller predicted
     distance. Works in the LOS frame, where φ is the angle of the prey's relative position.
     """
-    obs = np.asarray(observations, dtype=np.float64)
-    modes = np.broadcast_to(np.asarray(modes), obs.shape[:-1])
-    accel = np.where(modes == CHASE, ACCEL_CHASE, ACCEL_STALK)[..., None, None]
-    own_v = obs[..., None, _OWN_VEL]
-    prey_rel = obs[..., None, _PREY_REL]
-    prey_next = prey_rel + obs[..., None, _PREY_VEL] * DT
-    own_next = ((1.0 - DAMPING) * own_v + accel * DT * _DIRS) * DT  # (…, 7, 2), from the origin
-    line = prey_next - own_next
-    phi = np.arctan2(prey_rel[..., 1], prey_rel[..., 0])
-    change = np.abs(_wrap(np.arctan2(line[..., 1], line[..., 0]) - phi))
-    distance = np.hypot(line[..., 0], line[..., 1])
-    best = change.min(axis=-1, keepdims=True)
-    tied = change <= best + TIE_TOLERANCE
-    choice = np.argmin(np.where(tied, distance, np.inf), axis=-1)
-    return APPROACH_DIRECTIONS[choice]
+    obs = np.asarray(observations)
+    if obs.dtype not in (np.float32, np.float64):
+        obs = obs.astype(np.float64)
+    shape = obs.shape[:-1]
+    modes = np.asarray(modes, dtype=np.int64)
+    if modes.shape != shape:
+        modes = np.broadcast_to(modes, shape)
+    rows = obs.reshape(-1, obs.shape[-1])
+    directions = _parallel_navigation(rows, modes.reshape(-1), _DIRS, APPROACH_DIRECTIONS, *_PHYSICS).reshape(shape)
+    return directions[()] if not shape else directions  # one observation: a scalar, as numpy indexing gives
+
+
+@numba.njit(cache=True)
+def _parallel_navigation(obs, modes, dirs, approach, chase, accel_stalk, accel_chase, damping, dt):
+    """:func:`parallel_navigation` row by row (compiled: the rule runs for every predator of every
+    arena at every step), in float64 whatever the observations' type. The physics comes in as
+    arguments: numba's cache would keep constants of other modules as they were compiled."""
+    out = np.empty(obs.shape[0], dtype=np.int64)
+    for r in range(obs.shape[0]):
+        accel = accel_chase if modes[r] == chase else accel_stalk
+        px, py = np.float64(obs[r, _PREY_REL.start]), np.float64(obs[r, _PREY_REL.start + 1])
+        nx = px + np.float64(obs[r, _PREY_VEL.start]) * dt
+        ny = py + np.float64(obs[r, _PREY_VEL.start + 1]) * dt
+        vx, vy = np.float64(obs[r, _OWN_VEL.start]), np.float64(obs[r, _OWN_VEL.start + 1])
+        phi = np.arctan2(py, px)
+        best_change, choice, best_distance = np.inf, 0, np.inf
+        change = np.empty(len(approach))
+        distance = np.empty(len(approach))
+        for k in range(len(approach)):
+            lx = nx - ((1.0 - damping) * vx + accel * dt * dirs[k, 0]) * dt
+            ly = ny - ((1.0 - damping) * vy + accel * dt * dirs[k, 1]) * dt
+            change[k] = abs((np.arctan2(ly, lx) - phi + np.pi) % (2 * np.pi) - np.pi)
+            distance[k] = np.hypot(lx, ly)
+            best_change = min(best_change, change[k])
+        for k in range(len(approach)):  # ties (within TIE_TOLERANCE) to the smaller distance, then the first
+            if change[k] <= best_change + TIE_TOLERANCE and distance[k] < best_distance:
+                best_distance, choice = distance[k], k
+        out[r] = approach[choice]
+    return out
 
 
 def pure_pursuit(observations: np.ndarray) -> np.ndarray:

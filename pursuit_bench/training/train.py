@@ -208,7 +208,7 @@ class Run:
     def _report(self, record: EpisodeRecord, trace: EpisodeTrace | None) -> None:
         """Count a finished episode and tell the recorder and ``on_episode`` of it."""
         self.episodes_done += 1
-        record = dataclasses.replace(record, episode=self.episodes_done)
+        record.episode = self.episodes_done  # the record is this run's alone: numbered in place
         if self.recorder is not None:
             recorded = self.episodes_done == 1 or self.episodes_done % self.record_every == 0
             if recorded and trace is not None:
@@ -292,6 +292,11 @@ def _as_arrays(value: Any) -> Any:
     if isinstance(value, list):
         return [_as_arrays(v) for v in value]
     return value
+
+
+def _stacked(arrays: list[np.ndarray]) -> np.ndarray:
+    """``np.stack(arrays)``; a view of the one array when there is one (a run alone)."""
+    return arrays[0][None] if len(arrays) == 1 else np.stack(arrays)
 
 
 def _per_run(value: Any, k: int, what: str) -> list[Any]:
@@ -389,14 +394,13 @@ class Trainer:
         }
         decided = []
         for group in self.groups:  # one forward pass per group, all its runs at once
-            obs = np.stack([self.runs[r].obs[:, i] for r, i in zip(group.runs, group.indices, strict=True)])
-            q, v = group.learner.act_values(obs)
-            chosen = group.learner.choose(q, explore=True)
+            obs = _stacked([self.runs[r].obs[:, i] for r, i in zip(group.runs, group.indices, strict=True)])
+            chosen, q, v = group.learner.act_members(obs, explore=True)
             decided.append((obs, chosen))
             env_actions = members_to_env(group.agents, chosen, obs)
             for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):
                 put_actions(actions[r], i, env_actions[m])
-                if isinstance(agent, HierarchicalPredator):
+                if self.runs[r].traces is not None and isinstance(agent, HierarchicalPredator):
                     self.runs[r].q_values[:, i], self.runs[r].values[:, i] = agent.mode_q(q[m]), v[m]
         for r in active:
             run = self.runs[r]
@@ -407,13 +411,17 @@ class Trainer:
 
         steps = {r: self.runs[r].env.step(actions[r]) for r in active}
         for group, (obs, chosen) in zip(self.groups, decided, strict=True):
-            rows = []
+            rewards_m, next_m, terminated_m = [], [], []
             for r, i in zip(group.runs, group.indices, strict=True):
                 next_obs, rewards, terminated, _, info = steps[r]
-                real_next = np.where(info["done"][:, None], info["final_obs"][:, i], next_obs[:, i])
-                rows.append((rewards[:, i], real_next, terminated[:, i]))
-            rewards_m, next_m, terminated_m = (np.stack(column) for column in zip(*rows, strict=True))
-            group.learner.store(obs, chosen, rewards_m, next_m, terminated_m)
+                done = info["done"]
+                real_next = (
+                    np.where(done[:, None], info["final_obs"][:, i], next_obs[:, i]) if done.any() else next_obs[:, i]
+                )
+                rewards_m.append(rewards[:, i])
+                next_m.append(real_next)
+                terminated_m.append(terminated[:, i])
+            group.learner.store(obs, chosen, _stacked(rewards_m), _stacked(next_m), _stacked(terminated_m))
             losses = group.learner.train()
             if losses is not None:
                 for agent, r, loss in zip(group.agents, group.runs, losses, strict=True):
