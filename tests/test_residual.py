@@ -179,6 +179,13 @@ def test_the_mode_explores_as_the_hierarchical_predator_and_the_correction_rarel
     assert set(np.unique(corrections[corrections != 0])) == {-2, -1, 1, 2}
     greedy = ResidualPredator.split(residual.choose(residual.act_values(obs)[0], explore=False))[1]
     assert (greedy == 0).all()
+    # the training loop acts by act_members: the same choice over the 10 actions, with the correction's exploration
+    looped, q, _ = ResidualLearner(n_obs, QUICK, members=2, seed=[5, 6]).act_members(obs, explore=True)
+    assert q.shape == (2, 5000, 10)
+    looped_modes, looped_corrections = ResidualPredator.split(looped)
+    fresh = DQNLearner(n_obs, 2, QUICK, members=2, seed=[5, 6])
+    np.testing.assert_array_equal(looped_modes, fresh.act_members(obs, explore=True)[0])
+    assert abs((looped_corrections == 0).mean() - (1 - CORRECTION_EPSILON)) < 0.01
 
 
 def test_a_stack_splits_and_a_member_saves_and_loads_with_its_corrections() -> None:

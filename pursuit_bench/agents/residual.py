@@ -262,6 +262,13 @@ class ResidualLearner(DQNLearner):
 
     # --- acting -------------------------------------------------------------------------------
 
+    def act_members(self, obs: np.ndarray, *, explore: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The training loop's acting step, (actions, Q-values, V(s)): the mode learner's compiled
+        call acts over 2 actions only, so the residual predator acts by :meth:`act_values` (both
+        networks) and its own :meth:`choose` (the correction's exploration)."""
+        q, value = self.act_values(obs)
+        return self.choose(q, explore=explore), q, value
+
     def choose(self, q_values: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
         """Actions (M, B) ``5 · mode + j``: the mode greedy over its best correction, or with
         ε-greedy exploration exactly as the hierarchical predator's (the same draws from the same
