@@ -75,7 +75,19 @@ def venv(tmp_path: Path) -> Iterator[Path]:
 
 
 def _pip(python: Path, *args: str | Path) -> None:
-    _ok(_run(python, "-m", "pip", "install", "-q", "--no-compile", "--disable-pip-version-check", *args, cwd=python.parents[2]))
+    _ok(
+        _run(
+            python,
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-compile",
+            "--disable-pip-version-check",
+            *args,
+            cwd=python.parents[2],
+        )
+    )
 
 
 def test_the_wheel_holds_the_licence_and_says_mit(wheel: Path) -> None:
