@@ -52,7 +52,7 @@ AGENTS = textwrap.dedent(
     ("spec", "message"),
     [
         ("predator_0=user_agents:raising_factory", "the factory raised RuntimeError: no model file here"),
-        ("predator_0=user_agents:wrong_shape", "act_batch returned shape (4,); expected (mode, direction)"),
+        ("predator_0=user_agents:wrong_shape", "act_batch returned shape (12,); expected (mode, direction)"),
         ("predator_0=user_agents:raising_act", "act_batch raised KeyError: 'weights missing'"),
         ("predator_0=user_agents:out_of_range", "out of range; expected mode 0 or 1 and direction 0..11"),
         ("predator_0=user_agents:fractional", "non-integer actions"),

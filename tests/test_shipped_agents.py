@@ -48,8 +48,11 @@ def test_a_non_editable_install_carries_the_weights(tmp_path: Path) -> None:
     subprocess.run([*pip, "wheel", "--no-deps", "--no-build-isolation", "-w", tmp_path / "dist", source], check=True)
     (wheel,) = (tmp_path / "dist").glob("pursuit_bench-*.whl")
     with zipfile.ZipFile(wheel) as archive:
-        shipped = {n for n in archive.namelist() if n.endswith(".safetensors")}
+        weights = [n for n in archive.namelist() if n.endswith(".safetensors")]
+    shipped = [n for n in weights if Path(n).parent.parent.name == "pretrained"]  # pretrained/<condition>/<agent>
     assert {Path(n).parent.name for n in shipped} == set(CONDITIONS)
+    populations = {Path(n).parts[3] for n in weights if "/populations/" in n}  # pretrained/populations/<name>/…
+    assert {"provisional-prey", "provisional-predators"} <= populations, populations
     subprocess.run([*pip, "install", "--no-deps", "--target", tmp_path / "site", wheel], check=True)
     code = (
         "import pursuit_bench.pretrained as p, sys; assert p.__file__.startswith(sys.argv[1]), p.__file__; "
