@@ -456,8 +456,10 @@ def score(
                 zip([m.name for m in pop.members], averaged["agent"].mean(axis=1).tolist(), strict=True)
             ),
             "normalized": normalized(agent["mean"], random, shipped),
+            # the table every statistic above comes from (members × episodes, averaged over the slots)
+            "returns": averaged["agent"].tolist(),
             "references": {
-                key: {"mean_return": float(r.mean()), "ci": crossed_interval(r)["ci"]}
+                key: {"mean_return": float(r.mean()), "ci": crossed_interval(r)["ci"], "returns": r.tolist()}
                 for key, r in averaged.items()
                 if key != "agent"
             },
