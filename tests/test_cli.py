@@ -88,6 +88,9 @@ def test_same_seed_same_eval(tmp_path: Path) -> None:
         (["train", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
         (["eval", "--pretrained", "1p-high", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
         (["sweep", "--out", "a-file/sub/deeper"], "--out a-file/sub/deeper: a-file is a file"),
+        (["score", "random", "--role", "predator", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
+        (["report", ".", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
+        (["pool", ".", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: list[str], message: str) -> None:

@@ -10,7 +10,7 @@ from typing import Any
 
 import click
 
-from pursuit_bench.cli.options import BadInput
+from pursuit_bench.cli.options import BadInput, check_out_folder
 
 
 @click.command(short_help="Hierarchical against flat, both judged against one pool of opponents.")
@@ -51,6 +51,7 @@ def pool(
     OUT` rewrites the report from pool.json."""
     import os
 
+    check_out_folder(out)
     for where in sweeps:  # before anything heavy is imported (training.sweep brings torch): a refusal comes at once
         if not where.is_dir():
             raise BadInput(f"{where}: no such sweep folder")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from pursuit_bench.cli.options import BadInput
+from pursuit_bench.cli.options import BadInput, check_out_folder
 
 
 @click.command(short_help="A sweep's panels judged over seeds (better / not resolved / worse); a run's curves.")
@@ -27,8 +27,8 @@ def report(where: Path, out: Path | None) -> None:
         raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
     from pursuit_bench.study import report as reports
 
-    if out is not None and out.exists() and not out.is_dir():
-        raise BadInput(f"--out {out}: exists and is not a folder")
+    if out is not None:
+        check_out_folder(out)
     if (where / "config.json").is_file():
         _report_run(where, out or where)
         return

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from pursuit_bench.cli.options import BadInput, names, threads_option
+from pursuit_bench.cli.options import BadInput, check_out_folder, names, threads_option
 from pursuit_bench.env.conditions import CONDITIONS
 
 
@@ -46,8 +46,7 @@ def score(
     The agent fills every slot of its role. Writes score.json and score.md into --out, both
     complete or neither."""
     chosen = names(conditions, list(CONDITIONS), "conditions")
-    if out.exists() and not out.is_dir():
-        raise BadInput(f"--out {out}: exists and is not a folder")
+    check_out_folder(out)  # before anything is played: no part of its path may be a file
     import torch
 
     from pursuit_bench.cli.progress import Progress
