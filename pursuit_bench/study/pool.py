@@ -438,7 +438,7 @@ def counts_markdown(summary: dict[str, Any]) -> str:
             counts = entry[key]["counts"]
             lines.append(f"| {entry['episodes']} | pool {key} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
     counts = summary["learning_speed"]["counts"]
-    lines.append("| all budgets | learning speed | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
+    lines.append("| all budgets | head start (margin averaged over the budgets) | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
     return "\n".join(lines) + "\n"
 
 
