@@ -438,7 +438,8 @@ def counts_markdown(summary: dict[str, Any]) -> str:
             counts = entry[key]["counts"]
             lines.append(f"| {entry['episodes']} | pool {key} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
     counts = summary["learning_speed"]["counts"]
-    lines.append("| all budgets | head start (margin averaged over the budgets) | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
+    counted = " | ".join(str(counts[v]) for v in VERDICTS)
+    lines.append(f"| all budgets | head start (margin averaged over the budgets) | {counted} |")
     return "\n".join(lines) + "\n"
 
 
