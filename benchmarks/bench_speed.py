@@ -27,6 +27,7 @@ system's temporary folder and removed at the end).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import signal
@@ -34,6 +35,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -207,13 +209,20 @@ def main() -> None:
     unknown = set(args.sections) - set(SECTIONS)
     if unknown:
         parser.error(f"--sections: unknown {', '.join(sorted(unknown))}; expected some of {', '.join(SECTIONS)}")
+    with reference_tree(args.reference) as reference:
+        report(args, {"today": ROOT, "reference": reference})
+
+
+@contextlib.contextmanager
+def reference_tree(commit: str) -> Iterator[Path]:
+    """A git worktree of ``commit`` in a temporary folder, removed whatever happens (SIGTERM too)."""
     with tempfile.TemporaryDirectory() as scratch:
         reference = Path(scratch) / "reference"
-        add = ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(reference), args.reference]
+        add = ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(reference), commit]
         subprocess.run(add, check=True)
         signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # the worktree goes whatever happens
         try:
-            report(args, {"today": ROOT, "reference": reference})
+            yield reference
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(reference)], check=False)
 

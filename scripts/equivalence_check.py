@@ -28,15 +28,15 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "results" / "speed"
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_speed import reference_tree  # noqa: E402  (the benchmark's worktree of the code before)
 
 #: ``python -c WORKER SEEDS EPISODES EVAL_EPISODES``: trains the seeds stacked, evaluates each run,
 #: prints one JSON line. Uses only what both builds have.
@@ -177,29 +177,22 @@ def main() -> None:
         "--bits", type=int, metavar="STEPS", help="compare both builds' learners bit for bit after STEPS env steps"
     )
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory() as scratch:
-        reference = Path(scratch) / "reference"
-        add = ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(reference), args.reference]
-        subprocess.run(add, check=True)
-        signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # the worktree goes whatever happens
-        try:
-            trees = {"ours": ROOT, "reference": reference}
-            if args.bits:
-                compared = {
-                    condition: {name: in_tree(tree, BITS, condition, str(args.bits)) for name, tree in trees.items()}
-                    for condition in ("1p-high", "3p-high-shared")
-                }
-                write_json(OUT / "equivalence-bits.json", {"steps": args.bits, "seed": 3, **compared})
-                print(json.dumps(compared))
-                return
-            if args.time_only:
-                timed = {name: in_tree(tree, TIMER, str(args.episodes)) for name, tree in trees.items()}
-                write_json(OUT / "equivalence-run-time.json", {"episodes": args.episodes, **timed})
-                print(json.dumps(timed))
-                return
-            run_units(args, trees)
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(reference)], check=False)
+    with reference_tree(args.reference) as reference:
+        trees = {"ours": ROOT, "reference": reference}
+        if args.bits:
+            compared = {
+                condition: {name: in_tree(tree, BITS, condition, str(args.bits)) for name, tree in trees.items()}
+                for condition in ("1p-high", "3p-high-shared")
+            }
+            write_json(OUT / "equivalence-bits.json", {"steps": args.bits, "seed": 3, **compared})
+            print(json.dumps(compared))
+            return
+        if args.time_only:
+            timed = {name: in_tree(tree, TIMER, str(args.episodes)) for name, tree in trees.items()}
+            write_json(OUT / "equivalence-run-time.json", {"episodes": args.episodes, **timed})
+            print(json.dumps(timed))
+            return
+        run_units(args, trees)
 
 
 def run_units(args: argparse.Namespace, trees: dict[str, Path]) -> None:
