@@ -276,11 +276,9 @@ class ResidualLearner(DQNLearner):
         ``explore``) one of the four others, drawn from the corrections' generators."""
         table = np.asarray(q_values).reshape(*q_values.shape[:-1], 2, _PER_MODE)
         modes = table.max(axis=-1).argmax(axis=-1)
-        if explore:
-            eps = self.epsilon if epsilon is None else epsilon
-            for m, rng in enumerate(self.rngs):
-                random = rng.random(modes.shape[1:]) < eps
-                modes[m] = np.where(random, rng.integers(0, 2, size=modes.shape[1:]), modes[m])
+        if explore:  # the mode learner's own ε-greedy draws (2 actions), as the hierarchical predator's
+            uniforms, randoms, eps = self._exploration(modes.shape[1], explore, epsilon)
+            modes = np.where(uniforms < eps, randoms, modes)
         j = np.take_along_axis(table, modes[..., None, None], axis=-2)[..., 0, :].argmax(axis=-1)
         if explore:
             for m, rng in enumerate(self.correction_rngs):
