@@ -53,7 +53,7 @@ CHROMIUM_ARGS = (
     "--use-angle=swiftshader",
     "--enable-unsafe-swiftshader",
 )
-VIEWPORT = {"width": 1280, "height": 1000}
+VIEWPORT: Any = {"width": 1280, "height": 1000}  # Playwright's ViewportSize (a TypedDict)
 #: The prey's colour in the recordings (``pursuit_bench.env.render.PREY_RGB``).
 PREY_RGB = (40, 80, 220)
 EPISODE_PAGE = "episode/"
@@ -176,12 +176,19 @@ class Visitor:
         self.heard: list[str] = []
         page.on("console", self._console)
         page.on("pageerror", lambda error: self.heard.append(f"uncaught {error}"))
-        page.on("requestfailed", lambda r: self.heard.append(f"request failed: {r.url} ({r.failure})"))
+        page.on("requestfailed", self._request_failed)
         page.on("response", self._response)
 
     def _console(self, message: Any) -> None:
         if message.type in ("error", "assert"):
             self.heard.append(f"console.{message.type}: {message.text}")
+
+    def _request_failed(self, request: Any) -> None:
+        # net::ERR_ABORTED is the browser cancelling a request itself, as it does to the previous
+        # page's requests still in flight (the search worker) when the next page is opened; a file
+        # the site lacks answers 404, which _response hears.
+        if request.failure != "net::ERR_ABORTED":
+            self.heard.append(f"request failed: {request.url} ({request.failure})")
 
     def _response(self, response: Any) -> None:
         if response.status >= 400:

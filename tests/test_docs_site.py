@@ -237,8 +237,8 @@ def test_the_episode_page_draws_the_arena(browser_visit: list[site_check.PageRep
 @pytest.mark.slow
 def test_the_browser_check_catches_errors_broken_images_and_a_blank_viewer(tmp_path: Path) -> None:
     """The checker itself, on a site of three pages made here: a clean one, one with a console
-    error, an uncaught exception, a missing image and a name broken across lines in a narrow
-    table, and an episode page whose viewer draws nothing."""
+    error, an uncaught exception, a missing image, a request refused and a name broken across
+    lines in a narrow table, and an episode page whose viewer draws nothing."""
     (tmp_path / "ok").mkdir()
     (tmp_path / "ok" / "index.html").write_text(
         "<!doctype html><title>ok</title><p>fine</p><table><tr><td><code>2p-low-individual</code></td></tr></table>"
@@ -246,7 +246,8 @@ def test_the_browser_check_catches_errors_broken_images_and_a_blank_viewer(tmp_p
     (tmp_path / "index.html").write_text(
         "<!doctype html><title>bad</title><img src='missing.png'>"
         "<table style='width: 60px'><tr><td><code>2p-low-individual</code></td><td>wide text</td></tr></table>"
-        "<script>console.error('boom'); setTimeout(() => { throw new Error('late'); });</script>"
+        "<script>console.error('boom'); setTimeout(() => { throw new Error('late'); });"
+        " fetch('http://127.0.0.1:9/refused').catch(() => {});</script>"
     )
     (tmp_path / "episode").mkdir()
     (tmp_path / "episode" / "index.html").write_text(
@@ -260,6 +261,7 @@ def test_the_browser_check_catches_errors_broken_images_and_a_blank_viewer(tmp_p
     assert any("boom" in p for p in bad) and any("late" in p for p in bad), bad
     assert any(p.startswith("image did not load") and "missing.png" in p for p in bad), bad
     assert any("404" in p and "missing.png" in p for p in bad), bad  # the failed load itself
+    assert any(p.startswith("console: request failed") and "/refused" in p for p in bad), bad
     assert "a name in a table is broken across lines: 2p-low-individual" in bad, bad
     assert any("drew no arena" in p for p in reports["episode/"].problems), reports["episode/"].problems
 
