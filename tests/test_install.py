@@ -20,7 +20,7 @@ from pursuit_bench.cli.entry import EXTRA_OF
 
 ROOT = Path(__file__).resolve().parents[1]
 #: What a build needs of the checkout (pyproject.toml's readme, license-files and packages).
-SOURCES = ("pyproject.toml", "README.md", "LICENSE", "pursuit_bench")
+SOURCES = ("pyproject.toml", "DESCRIPTION.md", "LICENSE", "pursuit_bench")
 
 #: Minutes of installing (the training stack from PyPI): slow, and selectable on its own (-m install).
 pytestmark = [pytest.mark.slow, pytest.mark.install]
@@ -100,6 +100,9 @@ def test_the_wheel_holds_the_licence_and_says_mit(wheel: Path) -> None:
         )
         metadata = email.message_from_bytes(archive.read(next(n for n in names if n.endswith(".dist-info/METADATA"))))
     assert metadata["License-Expression"] == "MIT" and metadata["License-File"] == "LICENSE"
+    assert metadata["Description-Content-Type"] == "text/markdown"
+    page = metadata.get_payload(decode=True).decode()  # what a package index shows
+    assert page.strip() == (ROOT / "DESCRIPTION.md").read_text().strip()
     assert {"train", "ray", "test", "docs"} <= set(metadata.get_all("Provides-Extra"))
     plain = [r for r in metadata.get_all("Requires-Dist") if "extra ==" not in r]
     assert sorted(r.split(">")[0].split("<")[0] for r in plain) == [

@@ -60,6 +60,16 @@ def python_blocks(path: Path) -> list[str]:
     return [textwrap.dedent("\n".join(line[len(indent) :] for line in body.splitlines())) for indent, body in blocks]
 
 
+def test_the_package_description_has_no_relative_link_or_image() -> None:
+    """The wheel's long description (DESCRIPTION.md) is shown on a package index's page, where a
+    link or an image relative to the repository is broken: every target must be absolute."""
+    text = (check_readme.ROOT / "DESCRIPTION.md").read_text()
+    targets = re.findall(r"\]\(([^)\s]+)", text) + re.findall(r"<img[^>]*src=[\"']([^\"']+)", text)
+    assert all(re.match(r"https?://", t) for t in targets), targets
+    relative = "[a](docs/use.md) ![b](docs/figures/episode.png)"  # what the test must refuse
+    assert re.findall(r"\]\(([^)\s]+)", relative) == ["docs/use.md", "docs/figures/episode.png"]
+
+
 @pytest.mark.slow
 def test_every_python_block_of_the_readme_and_of_use_md_runs_as_written(tmp_path: Path) -> None:
     """One interpreter per file, its blocks run one after another (as a reader would paste them);
@@ -69,7 +79,9 @@ def test_every_python_block_of_the_readme_and_of_use_md_runs_as_written(tmp_path
     )
     assert code == 0, output
     readme, use = python_blocks(check_readme.ROOT / "README.md"), python_blocks(check_readme.ROOT / "docs" / "use.md")
+    package = python_blocks(check_readme.ROOT / "DESCRIPTION.md")
     assert len(readme) == 1 and "pursuit_v0" in readme[0] and len(use) >= 2 and "load_agents" in use[0]
+    assert package == readme  # the package index's page shows the README's example
     for blocks in (readme, use):
         script = "\n\n".join(blocks)
         done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
