@@ -69,7 +69,7 @@ def largest_correction(run: Path) -> float:
         seed=0,
         num_envs=32,
         epsilons={"prey_0": 0.1},
-        on_step=lambda obs, actions, done: seen.append(obs[:, 0].copy()),
+        on_step=lambda obs, actions, done, counted: seen.append(obs[counted, 0].copy()),
     )
     obs = np.concatenate(seen)[None]
     return float(learner.correction_values(obs)[..., 1:].max())

@@ -70,10 +70,10 @@ def collect(
     condition: obstacles); the states of every hierarchical predator."""
     names = list(agents)
     predators = [i for i, n in enumerate(names[:-1]) if isinstance(agents[n], HierarchicalPredator)]
-    steps: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    steps: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
 
-    def on_step(obs: np.ndarray, actions: np.ndarray, done: np.ndarray) -> None:
-        steps.append((obs.copy(), actions[:, :-1].copy(), done.copy()))
+    def on_step(obs: np.ndarray, actions: np.ndarray, done: np.ndarray, counted: np.ndarray) -> None:
+        steps.append((obs.copy(), actions[:, :-1].copy(), done.copy(), counted))
 
     epsilons = {names[-1]: 0.1}
     run_episodes(
@@ -90,6 +90,7 @@ def collect(
     actions = np.stack([s[1] for s in steps])  # (T, B, n_pred, 2)
     modes = actions[..., 0]  # (T, B, n_pred)
     done = np.stack([s[2] for s in steps])  # (T, B)
+    counted = np.stack([s[3] for s in steps])  # (T, B): the step belongs to one of the episodes
     positions = obs[..., 0:2]  # (T, B, n, 2): every agent's own position
     distances = np.linalg.norm(positions[:, :, :-1] - positions[:, :, -1:], axis=-1)  # (T, B, n_pred)
     closest = distances == distances.min(axis=-1, keepdims=True)
@@ -98,22 +99,22 @@ def collect(
     for i in predators:
         agent = agents[names[i]]
         assert isinstance(agent, HierarchicalPredator)
-        flat_obs = obs[:, :, i].reshape(-1, obs.shape[-1])
+        flat_obs = obs[:, :, i][counted]
         features, value = agent.value_features(flat_obs)
-        started = (modes[1:, :, i] == 1) & (modes[:-1, :, i] == 0) & ~fresh[1:]
+        started = (modes[1:, :, i] == 1) & (modes[:-1, :, i] == 0) & ~fresh[1:] & counted[1:]
         correction = None
         if isinstance(agent, ResidualPredator):
-            rule = navigate(flat_obs, modes[:, :, i].reshape(-1), avoidance=agent.avoidance)
-            taken = actions[:, :, i, 1].reshape(-1)
+            rule = navigate(flat_obs, modes[:, :, i][counted], avoidance=agent.avoidance)
+            taken = actions[:, :, i, 1][counted]
             correction = (taken - rule + N_DIRECTIONS // 2) % N_DIRECTIONS - N_DIRECTIONS // 2
         out[names[i]] = PredatorStates(
             features=features,
             value=value,
-            mode=modes[:, :, i].reshape(-1),
-            distance=distances[:, :, i].reshape(-1),
-            closest=closest[:, :, i].reshape(-1),
+            mode=modes[:, :, i][counted],
+            distance=distances[:, :, i][counted],
+            closest=closest[:, :, i][counted],
             onsets=distances[1:, :, i][started],
-            positions=positions.reshape(-1, *positions.shape[2:]),
+            positions=positions[counted],
             correction=correction,
         )
     return out

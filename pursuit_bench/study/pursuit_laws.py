@@ -126,8 +126,8 @@ def attacks(
     found: dict[str, list[Segment]] = {p: [] for p in predators}
     ended = [0]
 
-    def on_step(obs: np.ndarray, actions: np.ndarray, done: np.ndarray) -> None:
-        for arena in range(len(obs)):
+    def on_step(obs: np.ndarray, actions: np.ndarray, done: np.ndarray, counted: np.ndarray) -> None:
+        for arena in np.flatnonzero(counted).tolist():
             tracks.setdefault(arena, []).append(obs[arena, :, 0:2].copy())  # each agent's own position
             modes.setdefault(arena, []).append(actions[arena, :-1, 0].copy())
             if done[arena]:

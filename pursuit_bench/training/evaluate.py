@@ -69,7 +69,7 @@ def run_episodes(
     backend: Backend = "pymunk",
     recorder: Recorder | None = None,
     record: Callable[[int], bool] = lambda episode: True,
-    on_step: Callable[[np.ndarray, np.ndarray, np.ndarray], None] | None = None,
+    on_step: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None] | None = None,
     check: Callable[[], None] = lambda: None,
     task_options: Mapping[str, Any] | None = None,
     perturbations: Perturbations | None = None,
@@ -77,9 +77,12 @@ def run_episodes(
     """Play ``episodes`` episodes with ``actors`` (one per agent name). Agents named in
     ``epsilons`` act ε-greedily with that ε (learning agents only), the rest greedily. With a
     ``recorder``, the episodes numbered (from 1, in the order they end) where ``record`` says so
-    go into it, with the hierarchical predators' Q-values and V(s). ``on_step(obs, actions,
-    done)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
-    (B, n_agents, 2) and which arenas' episodes the step ended (B,). ``check()`` is called
+    go into it, with the hierarchical predators' Q-values and V(s). The episodes are the first
+    ``episodes`` to start, each played to its end (an arena that ends one starts the next while
+    any is left, then plays on unheard); they come in the order they end. ``on_step(obs, actions,
+    done, counted)`` hears every step: the observations acted on (B, n_agents, n_obs), the actions
+    (B, n_agents, 2), which arenas' episodes the step ended (B,) and which arenas were playing
+    one of the ``episodes`` (B,; an arena stops counting for good). ``check()`` is called
     before every step: the place to stop (by raising) when the caller was asked to.
     ``task_options``: task options beside the condition (``obstacles``, ``obstacle_radius``).
     ``perturbations``: the world's changes join the task options, and the agents sense and act
@@ -100,7 +103,12 @@ def run_episodes(
     collisions = np.zeros((env.num_envs, env.n_agents))
     contact = np.zeros((env.num_envs, env.n_agents))
     rows: list[tuple[np.ndarray, int, bool, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
-    while len(rows) < episodes:
+    # Each arena's episode counts if it was one of the first ``episodes`` to start: an arena whose
+    # episode ends starts a counted one while any is left, else plays on unheard. So every counted
+    # episode is played to its end (keeping the first to *finish* would favour short ones).
+    counting = np.ones(env.num_envs, dtype=bool)
+    started = env.num_envs
+    while counting.any():
         check()
         actions = np.zeros((env.num_envs, env.n_agents, 2), dtype=np.int64)
         q_values = np.full((env.num_envs, n_pred, 2), np.nan)
@@ -117,7 +125,7 @@ def run_episodes(
         acted_on = obs
         obs, rewards, _, truncated, info = env.step(actions)
         if on_step is not None:
-            on_step(acted_on, actions, info["done"])
+            on_step(acted_on, actions, info["done"], counting.copy())
         travelled += np.hypot(*(info["positions"] - before).transpose(2, 0, 1))
         chase += actions[:, :-1, 0]
         collisions += info["touching_obstacle"] & ~touching
@@ -126,33 +134,36 @@ def run_episodes(
         if traces is not None:
             traces.add_step(actions, rewards, info, q_values, values)
         for arena in np.flatnonzero(info["done"]):
-            length = int(info["episode_length"][arena])
-            rows.append(
-                (
-                    info["episode_return"][arena].copy(),
-                    length,
-                    bool(info["captured"][arena]),
-                    chase[arena] / length,
-                    travelled[arena].copy(),
-                    info["left_area"][arena].copy(),
-                    collisions[arena].copy(),
-                    contact[arena].copy(),
+            counted = bool(counting[arena])
+            if counted:
+                length = int(info["episode_length"][arena])
+                counting[arena] = started < episodes
+                started += int(counting[arena])
+                rows.append(
+                    (
+                        info["episode_return"][arena].copy(),
+                        length,
+                        bool(info["captured"][arena]),
+                        chase[arena] / length,
+                        travelled[arena].copy(),
+                        info["left_area"][arena].copy(),
+                        collisions[arena].copy(),
+                        contact[arena].copy(),
+                    )
                 )
-            )
             chase[arena] = 0.0
             travelled[arena] = 0.0
             collisions[arena] = 0.0
             contact[arena] = 0.0
-            if traces is not None and recorder is not None:
+            if traces is not None:
                 trace = traces.finish(
                     int(arena),
                     bool(truncated[arena, 0]),
                     env.core.world.positions[arena],
                     env.core.world.obstacles[arena],
                 )
-                if len(rows) <= episodes and record(len(rows)):
+                if counted and recorder is not None and record(len(rows)):
                     recorder.log_episode(len(rows), trace)
-    rows = rows[:episodes]
     return Episodes(
         returns=np.array([r[0] for r in rows]),
         lengths=np.array([r[1] for r in rows]),
@@ -172,6 +183,10 @@ def run_episodes(
 #: 47): one generator per learner, run through the variants in turn, episodes kept in the order
 #: they finished.
 PROTOCOL = "crn-1"
+#: ``protocol["draws"]`` of an evaluation with perturbed senses: each variant played alone by
+#: :func:`run_episodes`, every episode to its end (``"sequential"`` before 2026-12-03: the
+#: episodes that finished first).
+SEQUENTIAL = "sequential-to-end"
 
 
 def episode_seed(seed: int, episode: int) -> int:
@@ -374,8 +389,9 @@ def evaluate_agents(
     the other agents fixed. Every variant plays the same episodes with common random numbers:
     the same start states and the same exploration draws of the prey (:func:`play_variants`, all
     variants in one batch of arenas; ``protocol["draws"]`` says :data:`PROTOCOL`); with
-    perturbed senses each variant is played alone (``"sequential"``). Also the capture rate, time to
-    capture, distance travelled and fraction of steps in chase, as trained. The episodes as
+    perturbed senses each variant is played alone (:data:`SEQUENTIAL`: :func:`run_episodes`).
+    Also the capture rate, time to capture, distance travelled and fraction of steps in chase, as
+    trained. The episodes as
     trained go into ``recorder``. With a learning prey, ``prey_check`` compares it, greedy,
     with ``FleeingPrey`` in its place against the same predators on the same seeds: return,
     wall exits, captures, survival to the time limit.
@@ -464,7 +480,7 @@ def evaluate_agents(
         "mean_return": {a: float(r) for a, r in zip(names, trained.returns.mean(axis=0), strict=True)},
         "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
         "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
-        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon, "draws": PROTOCOL if crn else "sequential"},
+        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon, "draws": PROTOCOL if crn else SEQUENTIAL},
         "prey_check": checked,
         **({"perturbations": perturbations.changed} if perturbations is not None and perturbations.changed else {}),
         **(
