@@ -89,6 +89,34 @@ def test_a_population_that_breaks_the_format_is_refused(tmp_path: Path) -> None:
         populations.load("other", "1p-high", folder=tmp_path)
 
 
+@pytest.mark.parametrize(
+    ("source", "agent", "message"),
+    [
+        ("1p-low", "predator_0", "holds predator_0, a predator, for the slot prey_0; expected a prey"),
+        (
+            "3p-low-shared",
+            "prey_0",
+            "a prey trained in 3p-low-shared, observing 22 numbers; a prey of 1p-high observes 10",
+        ),
+    ],
+)
+def test_a_member_whose_weights_do_not_fit_its_slot_is_refused_before_play(
+    tmp_path: Path, source: str, agent: str, message: str
+) -> None:
+    """A prey member holding a predator's weights, or a prey of another team size: the file, what
+    it holds and what the slot expects, in one line, before anything is played."""
+    where = tmp_path / "mine" / "1p-high"
+    (where / "m").mkdir(parents=True)
+    (where / "m" / "prey_0.safetensors").write_bytes((pretrained.FOLDER / source / f"{agent}.safetensors").read_bytes())
+    member = {"name": "m", "kind": "hierarchical", "policy": None, "seed": 5, "trained": None}
+    index = {"population": "mine", "condition": "1p-high", "role": "prey", "provisional": False}
+    members = [{**member, "files": {"prey_0": "m/prey_0.safetensors"}}]
+    (where / populations.INDEX).write_text(json.dumps({**index, "members": members}))
+    population = populations.load("mine", "1p-high", folder=tmp_path)
+    with pytest.raises(ValueError, match=f"^{where / 'm' / 'prey_0.safetensors'}: {message}$"):
+        score.check_members(population)
+
+
 def test_a_population_written_as_the_rule_study_writes_it_is_read_as_it_stands(tmp_path: Path) -> None:
     """OWNERS.md's format: members exported by ``pretrained.export`` into ``<member>/<agent>.safetensors``."""
     agents = pretrained.load("1p-low")
@@ -261,9 +289,28 @@ def test_a_hand_written_agent_is_scored_in_one_command(tmp_path: Path, monkeypat
     [
         (["nowhere_module:make", "--role", "predator"], "cannot import 'nowhere_module'"),
         (["FleeingPrey", "--role", "predator"], "FleeingPrey is a prey: it cannot play --role predator"),
-        (["prey_only:make", "--role", "predator"], "cannot play --role predator in 1p-low"),
+        (
+            ["prey_only:make", "--role", "predator"],
+            "agent predator_0 (prey_only:make) cannot play --role predator in 1p-low: given 2 observations of 10 "
+            "numbers (the predator's there), act returned shape (2,); expected (mode, direction) per observation",
+        ),
+        (
+            ["predator_only:make", "--role", "prey", "--conditions", "3p-low-shared"],
+            "agent prey_0 (predator_only:make) cannot play --role prey in 3p-low-shared: given 2 observations of 22 "
+            "numbers (the prey's there), act returned shape (2, 2); expected one direction per observation",
+        ),
+        (
+            ["pretrained:3p-low-shared", "--role", "prey", "--conditions", "1p-low,2p-high-shared"],
+            "pretrained:3p-low-shared cannot play 1p-low, 2p-high-shared: its prey was trained in 3p-low-shared, "
+            "as a prey observing 22 numbers against 3 predators; expected a prey observing 10 numbers against "
+            "1 predator in 1p-low; a prey observing 16 numbers against 2 predators in 2p-high-shared",
+        ),
         (["random", "--role", "predator", "--conditions", "9p-nowhere"], "--conditions '9p-nowhere': expected"),
-        (["pretrained:1p-high", "--role", "predator", "--conditions", "2p-low-shared"], "cannot play 2p-low-shared"),
+        (
+            ["pretrained:1p-high", "--role", "predator", "--conditions", "2p-low-shared"],
+            "cannot play 2p-low-shared: its predators were trained in 1p-high, as 1 predator observing 10 numbers; "
+            "expected 2 predators observing 16 numbers each in 2p-low-shared",
+        ),
         (["random", "--role", "predator", "--population", "nobody"], "no population 'nobody'"),
     ],
 )
@@ -274,11 +321,15 @@ def test_bad_input_is_refused_in_one_line_and_writes_nothing(
     (tmp_path / "prey_only.py").write_text(
         "class R:\n    def act(self, o):\n        return 3\n\ndef make():\n    return R()\n"
     )
+    (tmp_path / "predator_only.py").write_text(
+        "class P:\n    def act(self, o):\n        return (1, 3)\n\ndef make():\n    return P()\n"
+    )
     code, output = run_cli("score", *args, "--episodes", "2", "--out", "out")
     assert code == 2, output
     assert message in output and len(output.strip().splitlines()) == 1, output
     assert not (tmp_path / "out").exists()
     sys.modules.pop("prey_only", None)
+    sys.modules.pop("predator_only", None)
 
 
 # ------------------------------------------------------------------ the leaderboard

@@ -58,12 +58,12 @@ def score(
         contestant = scoring.resolve(agent, role)
         playable = [c for c in chosen if contestant.can_play(c)]
         if not playable or (conditions != "all" and len(playable) < len(chosen)):
-            cannot = [c for c in chosen if c not in playable]
-            raise BadInput(f"{agent} cannot play {', '.join(cannot)} (its team's size differs)")
+            raise BadInput(scoring.cannot_play(contestant, chosen))
         name = population or populations.default(role)
         pops = {c: populations.load(name, c) for c in playable}
         for condition in playable:
             scoring.check_plays(contestant, condition)
+            scoring.check_members(pops[condition])
     except ValueError as error:
         raise BadInput(str(error)) from None
     skipped = [c for c in chosen if c not in playable]

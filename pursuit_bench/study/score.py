@@ -104,6 +104,9 @@ class Contestant:
     """(condition, seed) of the runs it comes from: a member trained in the same is excluded."""
     copies: bool = True
     """One agent copied into every slot (a module, a reference), not a trained team."""
+    trained_in: str | None = None
+    """The condition its agents were trained in (a run, one condition's shipped agents): their
+    observations have that condition's size, so it plays only conditions with as many agents."""
 
 
 def _agent_weights(agents: dict[str, Any]) -> set[str]:
@@ -187,6 +190,7 @@ def resolve(spec: str, role: str) -> Contestant:
             digests=lambda condition: _agent_weights(pretrained.load(source)),
             runs=lambda condition: {(source, seed)},
             copies=False,
+            trained_in=source,
         )
     folder = Path(spec)
     if (folder / "config.json").is_file():
@@ -223,6 +227,7 @@ def _run_folder(folder: Path, role: str) -> Contestant:
         digests=lambda condition: fingerprint,
         runs=lambda condition: {(config.condition, config.seed)},
         copies=False,
+        trained_in=config.condition,
     )
 
 
@@ -243,6 +248,33 @@ def _module(spec: str, role: str) -> Contestant:
     return Contestant(spec, f"{spec} (an agent module)", role, make)
 
 
+def _observes(condition: str, role: str) -> str:
+    """What an agent of ``role`` observes in ``condition``, in words: how many, of what size."""
+    n = len(CONDITIONS[condition].agent_names)
+    predators = f"{n - 1} predator{'s' if n > 2 else ''}"
+    if role == "predator":
+        return f"{predators} observing {obs_size(n)} numbers{' each' if n > 2 else ''}"
+    return f"a prey observing {obs_size(n)} numbers against {predators}"
+
+
+def cannot_play(contestant: Contestant, conditions: list[str] | tuple[str, ...]) -> str:
+    """Why ``contestant`` cannot play those of ``conditions`` it cannot, in one line: its agents'
+    size as trained, and what each condition expects."""
+    cannot = [c for c in conditions if not contestant.can_play(c)]
+    text = f"{contestant.label} cannot play {', '.join(cannot)}"
+    if contestant.trained_in is None:
+        return text
+    expected: dict[str, list[str]] = {}
+    for condition in cannot:
+        expected.setdefault(_observes(condition, contestant.role), []).append(condition)
+    return (
+        f"{text}: its {'prey was' if contestant.role == 'prey' else 'predators were'} trained in "
+        f"{contestant.trained_in}, as "
+        f"{_observes(contestant.trained_in, contestant.role)}; expected "
+        + "; ".join(f"{what} in {', '.join(where)}" for what, where in expected.items())
+    )
+
+
 def check_plays(contestant: Contestant, condition: str) -> None:
     """Refuse at once an agent that cannot act in ``condition``'s role: it is asked for actions for
     a few observations of the right size and must answer them in the role's action space."""
@@ -253,7 +285,18 @@ def check_plays(contestant: Contestant, condition: str) -> None:
             try:
                 agent.act_batch(np.zeros((2, n_obs), dtype=np.float32))
             except ValueError as error:
-                raise ValueError(f"cannot play --role {contestant.role} in {condition}: {error}") from None
+                what = str(error).removeprefix(f"agent {agent.name} ({agent.spec}): ")
+                raise ValueError(
+                    f"agent {agent.name} ({agent.spec}) cannot play --role {contestant.role} in {condition}: "
+                    f"given 2 observations of {n_obs} numbers (the {contestant.role}'s there), {what}"
+                ) from None
+
+
+def check_members(population: populations.Population) -> None:
+    """Refuse before anything is played a population whose members cannot play its condition
+    (weights of the other role, or of another team size): every member's agents are built."""
+    for member in population.members:
+        member.agents(population.condition, slots(population.condition, population.role))
 
 
 # ------------------------------------------------------------------ statistics
