@@ -7,6 +7,7 @@ import json
 import pickle
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -238,6 +239,24 @@ def test_the_interval_reduces_to_the_t_interval_for_one_member_and_grows_with_th
     assert np.diff(score.crossed_interval(apart)["ci"])[0] > 5 * np.diff(score.crossed_interval(close)["ci"])[0]
 
 
+def test_the_intervals_degrees_of_freedom_have_a_floor_of_one_on_degenerate_tables() -> None:
+    """Two members, two episodes: the residual's subtracted term takes Satterthwaite's df below 1
+    (1/3 here, by hand: every mean square 1/4), where the t quantile is in the thousands; the
+    floor gives the t interval with 1 df. A table whose members' and episodes' means are all
+    equal but whose returns differ gets the residual's share, not a zero-width interval."""
+    one_cell = score.crossed_interval(np.array([[0.0, 0.0], [0.0, 1.0]]))
+    assert one_cell["df"] == 1.0 and one_cell["se"] == pytest.approx(0.25)
+    assert one_cell["ci"] == pytest.approx(list(stats.t.interval(0.95, 1, 0.25, 0.25)))
+    crossed = score.crossed_interval(np.array([[0.0, 1.0], [1.0, 0.0]]))
+    assert crossed["df"] == 1.0 and crossed["ci"] == pytest.approx(list(stats.t.interval(0.95, 1, 0.5, 0.5)))
+    rng = np.random.default_rng(2)
+    for _ in range(300):  # tiny tables of capture-like returns: every df at least 1, every interval finite
+        found = score.crossed_interval(_capture_like(rng, 2, int(rng.integers(2, 5))))
+        assert found["df"] is None or found["df"] >= 1.0
+        assert found["ci"] is None or np.all(np.isfinite(found["ci"]))
+    assert score.crossed_interval(np.full((3, 4), -1.0))["ci"] == [-1.0, -1.0]  # all the same: no spread at all
+
+
 def test_the_aggregate_is_rliables_interquartile_mean() -> None:
     values = np.array([0.1, 0.9, 0.5, -0.2, 1.3, 0.7, 0.6, 0.2, 0.95, 0.4])
     middle = np.sort(values)[2:8]  # 10 conditions: the lowest and highest two left out
@@ -335,15 +354,58 @@ def test_bad_input_is_refused_in_one_line_and_writes_nothing(
 # ------------------------------------------------------------------ the leaderboard
 
 
-def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:
+def _leaderboard() -> Any:
     spec = importlib.util.spec_from_file_location("leaderboard", ROOT / "scripts" / "leaderboard.py")
     assert spec is not None and spec.loader is not None
     leaderboard = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(leaderboard)
+    return leaderboard
+
+
+def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:
+    leaderboard = _leaderboard()
     page = (ROOT / "docs" / "leaderboard.md").read_text()
     assert leaderboard.render(page) == page
+    assert f"--episodes {leaderboard.EPISODES} " in page.partition("## How to submit a result")[2]
     rows = json.loads((ROOT / "results" / "score" / "rows.json").read_text())
     for row in rows:
         result = json.loads((ROOT / "results" / "score" / row["file"]).read_text())
         assert row["command"].startswith("pursuit-bench score ") and f"--role {result['role']}" in row["command"]
         assert f"--episodes {result['episodes']} --seed {result['seed']}" in row["command"]
+
+
+def test_a_partial_score_is_marked_and_listed_after_the_full_ones(tmp_path: Path) -> None:
+    """A row scored in fewer conditions, or with fewer episodes per member, than the leaderboard's
+    full set is marked, said why under its table, and never placed above or among the full rows,
+    whatever its aggregate and its place in rows.json."""
+    leaderboard = _leaderboard()
+
+    def result(conditions: list[str], episodes: int, iqm: float) -> dict[str, Any]:
+        cells = {c: {"normalized": iqm} for c in conditions}
+        aggregate = {"iqm": iqm, "ci": [iqm - 0.1, iqm + 0.1], "conditions": conditions, "undefined": []}
+        return {
+            "conditions": cells,
+            "episodes": episodes,
+            "aggregate": aggregate,
+            "population": "p",
+            "provisional": False,
+            "role": "predator",
+        }
+
+    scores = {
+        "few-conditions": result(["1p-low", "1p-high"], 20, 1.5),
+        "few-episodes": result(list(CONDITIONS), 5, 1.4),
+        "full-a": result(list(CONDITIONS), 20, 0.5),
+        "full-b": result(list(CONDITIONS), 40, 0.9),
+    }
+    rows = []
+    for who, found in scores.items():
+        (tmp_path / f"{who}.json").write_text(json.dumps(found))
+        rows.append({"who": who, "role": "predator", "how": "h", "budget": "b", "file": f"{who}.json", "command": "c"})
+    (tmp_path / "rows.json").write_text(json.dumps(rows))
+    text = leaderboard.tables(tmp_path)
+    table = [line.split(" | ")[0].removeprefix("| ") for line in text.splitlines() if line.startswith("| ")]
+    assert table[1:] == ["full-a", "full-b", "few-conditions †", "few-episodes †"]
+    assert "- few-conditions: 2 of 10 conditions (1p-low, 1p-high)\n" in text
+    assert "- few-episodes: 5 episodes per member, not 20\n" in text
+    assert "† **Partial**" in text and leaderboard.tables(tmp_path) == text

@@ -41,6 +41,8 @@ from pursuit_bench.training import runs
 from pursuit_bench.training.evaluate import PROTOCOL, play_variants
 
 CONFIDENCE = 0.95
+#: The fewest degrees of freedom :func:`crossed_interval` gives its t quantile (docs/leaderboard.md says why).
+DF_FLOOR = 1.0
 RESAMPLES = 2000
 #: The ε the paper's evaluation protocol gives a learned prey (section 3.4); predators act greedily.
 PREY_EPSILON = 0.1
@@ -307,9 +309,9 @@ def crossed_interval(y: np.ndarray, confidence: float = CONFIDENCE) -> dict[str,
     members and the episodes as random draws (a crossed two-way random-effects design): the
     variance of the grand mean is ``σ²_m / M + σ²_e / E + σ²_r / (M E)``, estimated without bias by
     ``(MS_m + MS_e − MS_r) / (M E)`` from the two-way ANOVA's mean squares, with Satterthwaite's
-    degrees of freedom. One member: the t-interval over episodes. Its coverage, measured by
-    :func:`coverage` (docs/leaderboard.md), is 93–96 % from four members up and falls to 87–95 %
-    with two."""
+    degrees of freedom, at least :data:`DF_FLOOR`. One member: the t-interval over episodes. Its
+    coverage, measured by :func:`coverage` (docs/leaderboard.md), is 93–96 % from four members up
+    and falls to 87–95 % with two."""
     y = np.asarray(y, dtype=float)
     m, e = y.shape
     grand = float(y.mean())
@@ -330,11 +332,15 @@ def crossed_interval(y: np.ndarray, confidence: float = CONFIDENCE) -> dict[str,
     terms = [(ms_m, m - 1), (ms_e, e - 1), (-ms_r, df_r)]
     if ms_m + ms_e - ms_r <= 0:
         terms = terms[:2]
+    if ms_m + ms_e <= 0 < ms_r:  # every member's and every episode's mean the same, the rest not
+        terms = [(ms_r, df_r)]  # the residual's share alone, σ²_r / (M E), which the variance is at least
     total = sum(t for t, _ in terms)
     if total <= 0:  # every return the same
         return {"mean": grand, "ci": [grand, grand], "df": None, "se": 0.0}
     variance = total / (m * e)
-    df = total**2 / sum(t**2 / d for t, d in terms)
+    # Satterthwaite's df: never below the fewest of its terms' own when all are added, but the
+    # residual's subtracted term can take it towards 0, where the t quantile grows without bound
+    df = max(total**2 / sum(t**2 / d for t, d in terms), DF_FLOOR)
     se = float(np.sqrt(variance))
     half = float(stats.t.ppf(0.5 + confidence / 2, df)) * se
     return {"mean": grand, "ci": [grand - half, grand + half], "df": float(df), "se": se}
