@@ -2,7 +2,9 @@
 results/score/rows.json (each a score.json under results/score/ and how its agent was trained),
 written between the page's ``<!-- leaderboard:begin -->`` and ``<!-- leaderboard:end -->``
 markers; the prose around them is the page's own. tests/test_score.py checks the page is what
-this writes, byte for byte.
+this writes, byte for byte. A partial row (scored in fewer conditions than all of them, or with
+fewer episodes per member than the leaderboard's) is marked † and listed after the full ones,
+its shortfall said under the table: its aggregate is over less, and no row is ranked.
 
     python scripts/leaderboard.py            # rewrite docs/leaderboard.md
     python scripts/leaderboard.py --check    # exit 1 if it is not up to date
@@ -22,6 +24,21 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "score"
 PAGE = ROOT / "docs" / "leaderboard.md"
 BEGIN, END = "<!-- leaderboard:begin -->", "<!-- leaderboard:end -->"
+#: The leaderboard's episodes per member (the page's "How to submit a result").
+EPISODES = 20
+PARTIAL = "†"
+
+
+def shortfall(result: dict[str, Any]) -> list[str]:
+    """What a score lacks against a full row of the leaderboard: conditions of the paper not
+    scored, fewer episodes per member than :data:`EPISODES`; empty for a full row."""
+    scored = [c for c in score.CONDITIONS if c in result["conditions"]]
+    out = []
+    if len(scored) < len(score.CONDITIONS):
+        out.append(f"{len(scored)} of {len(score.CONDITIONS)} conditions ({', '.join(scored)})")
+    if result["episodes"] < EPISODES:
+        out.append(f"{result['episodes']} episodes per member, not {EPISODES}")
+    return out
 
 
 def tables(results: Path = RESULTS) -> str:
@@ -33,18 +50,33 @@ def tables(results: Path = RESULTS) -> str:
         mine = [(row, json.loads((results / row["file"]).read_text())) for row in rows if row["role"] == role]
         if not mine:
             continue
+        mine.sort(key=lambda pair: bool(shortfall(pair[1])))  # the full rows first, each part in the file's order
         conditions = sorted({c for _, r in mine for c in r["conditions"]}, key=list(score.CONDITIONS).index)
         populations = sorted({r["population"] for _, r in mine})
         provisional = " (provisional)" if any(r["provisional"] for _, r in mine) else ""
         out += [f"### {role.capitalize()} role", "", f"Against population {', '.join(populations)}{provisional}.", ""]
         out.append(score.leaderboard_header(conditions))
+        partial = []
         for row, result in mine:
             normalized = {c: v["normalized"] for c, v in result["conditions"].items()}
             aggregate = score.aggregate_text(result["aggregate"])
             cells = ["–" if normalized.get(c) is None else f"{normalized[c]:.2f}" for c in conditions]
-            out.append(f"| {row['who']} | {row['how']} | {row['budget']} | {aggregate} | " + " | ".join(cells) + " |")
+            who = row["who"]
+            if lacks := shortfall(result):
+                who = f"{who} {PARTIAL}"
+                partial.append(f"- {row['who']}: {'; '.join(lacks)}")
+            out.append(f"| {who} | {row['how']} | {row['budget']} | {aggregate} | " + " | ".join(cells) + " |")
             commands.append(f"- {row['who']} ({role}): `{row['command']}` → `results/score/{row['file']}`")
         out.append("")
+        if partial:
+            out += [
+                f"{PARTIAL} **Partial**: scored in fewer than all {len(score.CONDITIONS)} conditions or with fewer "
+                f"than {EPISODES} episodes per member. Partial rows come after the full ones and are not ranked "
+                "with them: each aggregate is over what that row was scored on only.",
+                "",
+                *partial,
+                "",
+            ]
     out += ["The commands behind the rows (run from the repository's root):", "", *commands, "", END]
     return "\n".join(out)
 

@@ -100,6 +100,38 @@ def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: l
     assert code == 2 and message in output and len(output.strip().splitlines()) == 1, output
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["train"],
+        ["eval", "--pretrained", "1p-high"],
+        ["analyze", "--pretrained", "1p-high"],
+        ["law", "--pretrained", "1p-high"],
+        ["robust", "--pretrained", "1p-high"],
+        ["robust", "."],
+        ["sweep"],
+        ["pool", "."],
+        ["report", "."],
+        ["score", "random", "--role", "predator", "--conditions", "1p-low", "--episodes", "2"],
+    ],
+)
+@pytest.mark.parametrize(
+    ("out", "message"),
+    [("", "--out '': an empty path"), ("/proc/x", "--out /proc/x: cannot write there"), ("/proc/x/y", "cannot write")],
+)
+def test_an_out_folder_that_cannot_be_written_is_refused_before_any_work(
+    tmp_path: Path, monkeypatch, command: list[str], out: str, message: str
+) -> None:
+    """Every command's --out is checked as the command line is read: an impossible or empty path
+    is one line and status 2, before anything is played or trained, and nothing is left behind."""
+    if out.startswith("/proc") and not Path("/proc").is_dir():
+        pytest.skip("needs Linux's /proc (a folder nothing can be made in)")
+    monkeypatch.chdir(tmp_path)
+    code, output = run_cli(*command, "--out", out)
+    assert code == 2 and message in output and len(output.strip().splitlines()) == 1, output
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_view_without_a_display_says_what_to_do(tmp_path: Path, monkeypatch) -> None:
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)

@@ -7,6 +7,7 @@ import json
 import pickle
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -87,6 +88,34 @@ def test_a_population_that_breaks_the_format_is_refused(tmp_path: Path) -> None:
             populations.load("mine", "1p-high", folder=tmp_path)
     with pytest.raises(ValueError, match="no population 'other'"):
         populations.load("other", "1p-high", folder=tmp_path)
+
+
+@pytest.mark.parametrize(
+    ("source", "agent", "message"),
+    [
+        ("1p-low", "predator_0", "holds predator_0, a predator, for the slot prey_0; expected a prey"),
+        (
+            "3p-low-shared",
+            "prey_0",
+            "a prey trained in 3p-low-shared, observing 22 numbers; a prey of 1p-high observes 10",
+        ),
+    ],
+)
+def test_a_member_whose_weights_do_not_fit_its_slot_is_refused_before_play(
+    tmp_path: Path, source: str, agent: str, message: str
+) -> None:
+    """A prey member holding a predator's weights, or a prey of another team size: the file, what
+    it holds and what the slot expects, in one line, before anything is played."""
+    where = tmp_path / "mine" / "1p-high"
+    (where / "m").mkdir(parents=True)
+    (where / "m" / "prey_0.safetensors").write_bytes((pretrained.FOLDER / source / f"{agent}.safetensors").read_bytes())
+    member = {"name": "m", "kind": "hierarchical", "policy": None, "seed": 5, "trained": None}
+    index = {"population": "mine", "condition": "1p-high", "role": "prey", "provisional": False}
+    members = [{**member, "files": {"prey_0": "m/prey_0.safetensors"}}]
+    (where / populations.INDEX).write_text(json.dumps({**index, "members": members}))
+    population = populations.load("mine", "1p-high", folder=tmp_path)
+    with pytest.raises(ValueError, match=f"^{where / 'm' / 'prey_0.safetensors'}: {message}$"):
+        score.check_members(population)
 
 
 def test_a_population_written_as_the_rule_study_writes_it_is_read_as_it_stands(tmp_path: Path) -> None:
@@ -210,6 +239,24 @@ def test_the_interval_reduces_to_the_t_interval_for_one_member_and_grows_with_th
     assert np.diff(score.crossed_interval(apart)["ci"])[0] > 5 * np.diff(score.crossed_interval(close)["ci"])[0]
 
 
+def test_the_intervals_degrees_of_freedom_have_a_floor_of_one_on_degenerate_tables() -> None:
+    """Two members, two episodes: the residual's subtracted term takes Satterthwaite's df below 1
+    (1/3 here, by hand: every mean square 1/4), where the t quantile is in the thousands; the
+    floor gives the t interval with 1 df. A table whose members' and episodes' means are all
+    equal but whose returns differ gets the residual's share, not a zero-width interval."""
+    one_cell = score.crossed_interval(np.array([[0.0, 0.0], [0.0, 1.0]]))
+    assert one_cell["df"] == 1.0 and one_cell["se"] == pytest.approx(0.25)
+    assert one_cell["ci"] == pytest.approx(list(stats.t.interval(0.95, 1, 0.25, 0.25)))
+    crossed = score.crossed_interval(np.array([[0.0, 1.0], [1.0, 0.0]]))
+    assert crossed["df"] == 1.0 and crossed["ci"] == pytest.approx(list(stats.t.interval(0.95, 1, 0.5, 0.5)))
+    rng = np.random.default_rng(2)
+    for _ in range(300):  # tiny tables of capture-like returns: every df at least 1, every interval finite
+        found = score.crossed_interval(_capture_like(rng, 2, int(rng.integers(2, 5))))
+        assert found["df"] is None or found["df"] >= 1.0
+        assert found["ci"] is None or np.all(np.isfinite(found["ci"]))
+    assert score.crossed_interval(np.full((3, 4), -1.0))["ci"] == [-1.0, -1.0]  # all the same: no spread at all
+
+
 def test_the_aggregate_is_rliables_interquartile_mean() -> None:
     values = np.array([0.1, 0.9, 0.5, -0.2, 1.3, 0.7, 0.6, 0.2, 0.95, 0.4])
     middle = np.sort(values)[2:8]  # 10 conditions: the lowest and highest two left out
@@ -261,9 +308,28 @@ def test_a_hand_written_agent_is_scored_in_one_command(tmp_path: Path, monkeypat
     [
         (["nowhere_module:make", "--role", "predator"], "cannot import 'nowhere_module'"),
         (["FleeingPrey", "--role", "predator"], "FleeingPrey is a prey: it cannot play --role predator"),
-        (["prey_only:make", "--role", "predator"], "cannot play --role predator in 1p-low"),
+        (
+            ["prey_only:make", "--role", "predator"],
+            "agent predator_0 (prey_only:make) cannot play --role predator in 1p-low: given 2 observations of 10 "
+            "numbers (the predator's there), act returned shape (2,); expected (mode, direction) per observation",
+        ),
+        (
+            ["predator_only:make", "--role", "prey", "--conditions", "3p-low-shared"],
+            "agent prey_0 (predator_only:make) cannot play --role prey in 3p-low-shared: given 2 observations of 22 "
+            "numbers (the prey's there), act returned shape (2, 2); expected one direction per observation",
+        ),
+        (
+            ["pretrained:3p-low-shared", "--role", "prey", "--conditions", "1p-low,2p-high-shared"],
+            "pretrained:3p-low-shared cannot play 1p-low, 2p-high-shared: its prey was trained in 3p-low-shared, "
+            "as a prey observing 22 numbers against 3 predators; expected a prey observing 10 numbers against "
+            "1 predator in 1p-low; a prey observing 16 numbers against 2 predators in 2p-high-shared",
+        ),
         (["random", "--role", "predator", "--conditions", "9p-nowhere"], "--conditions '9p-nowhere': expected"),
-        (["pretrained:1p-high", "--role", "predator", "--conditions", "2p-low-shared"], "cannot play 2p-low-shared"),
+        (
+            ["pretrained:1p-high", "--role", "predator", "--conditions", "2p-low-shared"],
+            "cannot play 2p-low-shared: its predators were trained in 1p-high, as 1 predator observing 10 numbers; "
+            "expected 2 predators observing 16 numbers each in 2p-low-shared",
+        ),
         (["random", "--role", "predator", "--population", "nobody"], "no population 'nobody'"),
     ],
 )
@@ -274,25 +340,72 @@ def test_bad_input_is_refused_in_one_line_and_writes_nothing(
     (tmp_path / "prey_only.py").write_text(
         "class R:\n    def act(self, o):\n        return 3\n\ndef make():\n    return R()\n"
     )
+    (tmp_path / "predator_only.py").write_text(
+        "class P:\n    def act(self, o):\n        return (1, 3)\n\ndef make():\n    return P()\n"
+    )
     code, output = run_cli("score", *args, "--episodes", "2", "--out", "out")
     assert code == 2, output
     assert message in output and len(output.strip().splitlines()) == 1, output
     assert not (tmp_path / "out").exists()
     sys.modules.pop("prey_only", None)
+    sys.modules.pop("predator_only", None)
 
 
 # ------------------------------------------------------------------ the leaderboard
 
 
-def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:
+def _leaderboard() -> Any:
     spec = importlib.util.spec_from_file_location("leaderboard", ROOT / "scripts" / "leaderboard.py")
     assert spec is not None and spec.loader is not None
     leaderboard = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(leaderboard)
+    return leaderboard
+
+
+def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:
+    leaderboard = _leaderboard()
     page = (ROOT / "docs" / "leaderboard.md").read_text()
     assert leaderboard.render(page) == page
+    assert f"--episodes {leaderboard.EPISODES} " in page.partition("## How to submit a result")[2]
     rows = json.loads((ROOT / "results" / "score" / "rows.json").read_text())
     for row in rows:
         result = json.loads((ROOT / "results" / "score" / row["file"]).read_text())
         assert row["command"].startswith("pursuit-bench score ") and f"--role {result['role']}" in row["command"]
         assert f"--episodes {result['episodes']} --seed {result['seed']}" in row["command"]
+
+
+def test_a_partial_score_is_marked_and_listed_after_the_full_ones(tmp_path: Path) -> None:
+    """A row scored in fewer conditions, or with fewer episodes per member, than the leaderboard's
+    full set is marked, said why under its table, and never placed above or among the full rows,
+    whatever its aggregate and its place in rows.json."""
+    leaderboard = _leaderboard()
+
+    def result(conditions: list[str], episodes: int, iqm: float) -> dict[str, Any]:
+        cells = {c: {"normalized": iqm} for c in conditions}
+        aggregate = {"iqm": iqm, "ci": [iqm - 0.1, iqm + 0.1], "conditions": conditions, "undefined": []}
+        return {
+            "conditions": cells,
+            "episodes": episodes,
+            "aggregate": aggregate,
+            "population": "p",
+            "provisional": False,
+            "role": "predator",
+        }
+
+    scores = {
+        "few-conditions": result(["1p-low", "1p-high"], 20, 1.5),
+        "few-episodes": result(list(CONDITIONS), 5, 1.4),
+        "full-a": result(list(CONDITIONS), 20, 0.5),
+        "full-b": result(list(CONDITIONS), 40, 0.9),
+    }
+    rows = []
+    for who, found in scores.items():
+        (tmp_path / f"{who}.json").write_text(json.dumps(found))
+        rows.append({"who": who, "role": "predator", "how": "h", "budget": "b", "file": f"{who}.json", "command": "c"})
+    (tmp_path / "rows.json").write_text(json.dumps(rows))
+    text = leaderboard.tables(tmp_path)
+    table = [line.split(" | ")[0].removeprefix("| ") for line in text.splitlines() if line.startswith("| ")]
+    assert table[1:] == ["full-a", "full-b", "few-conditions †", "few-episodes †"]
+    assert "- few-conditions: 2 of 10 conditions (1p-low, 1p-high)\n" in text
+    assert "- few-episodes: 5 episodes per member, not 20\n" in text
+    assert "† **Partial**" in text and leaderboard.tables(tmp_path) == text

@@ -9,8 +9,10 @@ import contextlib
 import dataclasses
 import inspect
 import itertools
+import os
 import re
 import shutil
+import tempfile
 import textwrap
 from collections.abc import Iterator
 from pathlib import Path
@@ -213,7 +215,7 @@ def pretrained_options(command: Any) -> Any:
     """``--pretrained CONDITION`` and ``--out DIR``: the shipped agents instead of a RUN."""
     command = click.option(
         "--out",
-        type=click.Path(path_type=Path),
+        type=OutFolder(),
         default=None,
         help="With --pretrained: the folder for the results [runs/pretrained-CONDITION].",
     )(command)
@@ -242,13 +244,45 @@ def run_or_pretrained(run: Path | None, pretrained: str | None, out: Path | None
 
 
 def check_out_folder(out: Path) -> None:
-    """BadInput unless ``--out`` is a folder or can be made one: no part of its path is a file."""
-    for part in (out, *out.parents):
-        if part.exists():
-            if not part.is_dir():
-                what = "exists and is not a folder" if part == out else f"{part} is a file"
-                raise BadInput(f"--out {out}: {what}")
-            return
+    """BadInput unless ``--out`` is a folder this process can write in, or can make: no part of
+    its path is a file, and a file can be made there. What the check makes (the missing folders,
+    a probe file) it removes again, so that a refusal later leaves nothing behind."""
+    missing = []
+    try:
+        for part in (out, *out.parents):
+            if part.exists():
+                if not part.is_dir():
+                    what = "exists and is not a folder" if part == out else f"{part} is a file"
+                    raise BadInput(f"--out {out}: {what}")
+                break
+            missing.append(part)
+        try:
+            for part in reversed(missing):
+                part.mkdir()
+            fd, probe = tempfile.mkstemp(dir=out, prefix=".write-check.")
+            os.close(fd)
+            os.unlink(probe)
+        finally:
+            for part in missing:  # the deepest first; one made meanwhile by another process stays
+                with contextlib.suppress(OSError):
+                    part.rmdir()
+    except OSError as error:
+        raise BadInput(f"--out {out}: cannot write there ({error.strerror or error})") from None
+
+
+class OutFolder(click.Path):
+    """The type of every ``--out``: a folder :func:`check_out_folder` accepts, checked as the
+    command line is read (before any work), and never the empty path (pathlib reads it as '.')."""
+
+    def __init__(self) -> None:
+        super().__init__(path_type=Path)
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and not value.strip():
+            raise BadInput(f"--out {value!r}: an empty path; give a folder")
+        out = Path(os.fsdecode(super().convert(value, param, ctx)))
+        check_out_folder(out)
+        return out
 
 
 def check_run_folder(folder: Path) -> None:

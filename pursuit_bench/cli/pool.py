@@ -10,12 +10,12 @@ from typing import Any
 
 import click
 
-from pursuit_bench.cli.options import BadInput, check_out_folder
+from pursuit_bench.cli.options import BadInput, OutFolder, check_out_folder
 
 
 @click.command(short_help="Hierarchical against flat, both judged against one pool of opponents.")
 @click.argument("sweeps", metavar="SWEEP...", type=click.Path(path_type=Path), nargs=-1, required=True)
-@click.option("--out", type=click.Path(path_type=Path), required=True, help="Folder for pool.json and its report.")
+@click.option("--out", type=OutFolder(), required=True, help="Folder for pool.json and its report.")
 @click.option(
     "--pool-seeds",
     default=None,

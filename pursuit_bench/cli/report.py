@@ -10,12 +10,12 @@ from pathlib import Path
 
 import click
 
-from pursuit_bench.cli.options import BadInput, check_out_folder
+from pursuit_bench.cli.options import BadInput, OutFolder, check_out_folder
 
 
 @click.command(short_help="A sweep's panels judged over seeds (better / not resolved / worse); a run's curves.")
 @click.argument("where", metavar="SWEEP|RESULTS|RUN", type=click.Path(path_type=Path))
-@click.option("--out", type=click.Path(path_type=Path), default=None, help="Where to write [the folder given].")
+@click.option("--out", type=OutFolder(), default=None, help="Where to write [the folder given].")
 def report(where: Path, out: Path | None) -> None:
     """Fig. 2 over seeds from a sweep's run folders, or from its compact results (what
     `scripts/export_results.py` writes): report.md and report.json (the

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from pursuit_bench.cli.options import BadInput, check_out_folder, names, threads_option
+from pursuit_bench.cli.options import BadInput, OutFolder, names, threads_option
 from pursuit_bench.env.conditions import CONDITIONS
 
 
@@ -28,7 +28,7 @@ from pursuit_bench.env.conditions import CONDITIONS
 @click.option(
     "--population", default=None, help="The opponents' population [rule-study once shipped, else provisional]."
 )
-@click.option("--out", type=click.Path(path_type=Path), required=True, help="Folder for score.json and score.md.")
+@click.option("--out", type=OutFolder(), required=True, help="Folder for score.json and score.md.")
 @threads_option
 def score(
     agent: str,
@@ -46,7 +46,6 @@ def score(
     The agent fills every slot of its role. Writes score.json and score.md into --out, both
     complete or neither."""
     chosen = names(conditions, list(CONDITIONS), "conditions")
-    check_out_folder(out)  # before anything is played: no part of its path may be a file
     import torch
 
     from pursuit_bench.cli.progress import Progress
@@ -59,12 +58,12 @@ def score(
         contestant = scoring.resolve(agent, role)
         playable = [c for c in chosen if contestant.can_play(c)]
         if not playable or (conditions != "all" and len(playable) < len(chosen)):
-            cannot = [c for c in chosen if c not in playable]
-            raise BadInput(f"{agent} cannot play {', '.join(cannot)} (its team's size differs)")
+            raise BadInput(scoring.cannot_play(contestant, chosen))
         name = population or populations.default(role)
         pops = {c: populations.load(name, c) for c in playable}
         for condition in playable:
             scoring.check_plays(contestant, condition)
+            scoring.check_members(pops[condition])
     except ValueError as error:
         raise BadInput(str(error)) from None
     skipped = [c for c in chosen if c not in playable]

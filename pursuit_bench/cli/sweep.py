@@ -15,6 +15,7 @@ from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS
 from pursuit_bench.cli.options import (
     PREDATOR_KINDS,
     BadInput,
+    OutFolder,
     check_out_folder,
     episode_counts,
     in_option_words,
@@ -76,7 +77,7 @@ from pursuit_bench.io.signals import SignalCatcher, Stopped
     help="Comma-separated episode counts at which every run keeps its checkpoint, evaluated like the final one "
     "(eval-epN.json): learning against budget, e.g. 1500,5000.",
 )
-@click.option("--out", type=click.Path(path_type=Path), required=True, help="Sweep folder, e.g. sweeps/NAME.")
+@click.option("--out", type=OutFolder(), required=True, help="Sweep folder, e.g. sweeps/NAME.")
 @threads_option
 @training_options
 def sweep(

@@ -19,6 +19,7 @@ from pursuit_bench.agents.config import PRESET_ARENAS, PRESETS
 from pursuit_bench.cli.options import (
     PREDATOR_KINDS,
     BadInput,
+    OutFolder,
     check_out_folder,
     in_option_words,
     recording_every,
@@ -134,7 +135,7 @@ def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: fl
     show_default=True,
     help="Seeds the arenas, the networks and every learner's sampling.",
 )
-@click.option("--out", type=click.Path(path_type=Path), default=None, help="Run folder [runs/CONDITION-seedS].")
+@click.option("--out", type=OutFolder(), default=None, help="Run folder [runs/CONDITION-seedS].")
 @click.option(
     "--resume",
     is_flag=True,

@@ -100,9 +100,16 @@ class Member:
             path = self.files[name]
             weights, header = pretrained.read(path)
             config = TrainConfig.from_dict(json.loads(header["training"]))
+            role, given = _role(name), _role(header["agent"])
+            if given != role:
+                raise ValueError(f"{path}: holds {header['agent']}, a {given}, for the slot {name}; expected a {role}")
             n_agents = len(CONDITIONS[config.condition].agent_names)
-            if obs_size(n_agents) != obs_size(len(CONDITIONS[condition].agent_names)):
-                raise ValueError(f"{path}: trained with {n_agents} agents, cannot play {condition}")
+            expected = obs_size(len(CONDITIONS[condition].agent_names))
+            if obs_size(n_agents) != expected:
+                raise ValueError(
+                    f"{path}: a {role} trained in {config.condition}, observing {obs_size(n_agents)} numbers; "
+                    f"a {role} of {condition} observes {expected}"
+                )
             _, (built,) = build_agents([config], [obs_size(n_agents)])
             agent = built[header["agent"]]
             if not isinstance(agent, LearningAgent):
@@ -114,6 +121,11 @@ class Member:
             agent.name = name
             out[name] = agent
         return out
+
+
+def _role(agent: str) -> str:
+    """The role of an agent by its name (``predator_0``, …, ``prey_0``)."""
+    return "prey" if agent.startswith("prey") else "predator"
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,8 @@ from pursuit_bench.training import runs
 from pursuit_bench.training.evaluate import PROTOCOL, play_variants
 
 CONFIDENCE = 0.95
+#: The fewest degrees of freedom :func:`crossed_interval` gives its t quantile (docs/leaderboard.md says why).
+DF_FLOOR = 1.0
 RESAMPLES = 2000
 #: The ε the paper's evaluation protocol gives a learned prey (section 3.4); predators act greedily.
 PREY_EPSILON = 0.1
@@ -104,6 +106,9 @@ class Contestant:
     """(condition, seed) of the runs it comes from: a member trained in the same is excluded."""
     copies: bool = True
     """One agent copied into every slot (a module, a reference), not a trained team."""
+    trained_in: str | None = None
+    """The condition its agents were trained in (a run, one condition's shipped agents): their
+    observations have that condition's size, so it plays only conditions with as many agents."""
 
 
 def _agent_weights(agents: dict[str, Any]) -> set[str]:
@@ -187,6 +192,7 @@ def resolve(spec: str, role: str) -> Contestant:
             digests=lambda condition: _agent_weights(pretrained.load(source)),
             runs=lambda condition: {(source, seed)},
             copies=False,
+            trained_in=source,
         )
     folder = Path(spec)
     if (folder / "config.json").is_file():
@@ -223,6 +229,7 @@ def _run_folder(folder: Path, role: str) -> Contestant:
         digests=lambda condition: fingerprint,
         runs=lambda condition: {(config.condition, config.seed)},
         copies=False,
+        trained_in=config.condition,
     )
 
 
@@ -243,6 +250,33 @@ def _module(spec: str, role: str) -> Contestant:
     return Contestant(spec, f"{spec} (an agent module)", role, make)
 
 
+def _observes(condition: str, role: str) -> str:
+    """What an agent of ``role`` observes in ``condition``, in words: how many, of what size."""
+    n = len(CONDITIONS[condition].agent_names)
+    predators = f"{n - 1} predator{'s' if n > 2 else ''}"
+    if role == "predator":
+        return f"{predators} observing {obs_size(n)} numbers{' each' if n > 2 else ''}"
+    return f"a prey observing {obs_size(n)} numbers against {predators}"
+
+
+def cannot_play(contestant: Contestant, conditions: list[str] | tuple[str, ...]) -> str:
+    """Why ``contestant`` cannot play those of ``conditions`` it cannot, in one line: its agents'
+    size as trained, and what each condition expects."""
+    cannot = [c for c in conditions if not contestant.can_play(c)]
+    text = f"{contestant.label} cannot play {', '.join(cannot)}"
+    if contestant.trained_in is None:
+        return text
+    expected: dict[str, list[str]] = {}
+    for condition in cannot:
+        expected.setdefault(_observes(condition, contestant.role), []).append(condition)
+    return (
+        f"{text}: its {'prey was' if contestant.role == 'prey' else 'predators were'} trained in "
+        f"{contestant.trained_in}, as "
+        f"{_observes(contestant.trained_in, contestant.role)}; expected "
+        + "; ".join(f"{what} in {', '.join(where)}" for what, where in expected.items())
+    )
+
+
 def check_plays(contestant: Contestant, condition: str) -> None:
     """Refuse at once an agent that cannot act in ``condition``'s role: it is asked for actions for
     a few observations of the right size and must answer them in the role's action space."""
@@ -253,7 +287,18 @@ def check_plays(contestant: Contestant, condition: str) -> None:
             try:
                 agent.act_batch(np.zeros((2, n_obs), dtype=np.float32))
             except ValueError as error:
-                raise ValueError(f"cannot play --role {contestant.role} in {condition}: {error}") from None
+                what = str(error).removeprefix(f"agent {agent.name} ({agent.spec}): ")
+                raise ValueError(
+                    f"agent {agent.name} ({agent.spec}) cannot play --role {contestant.role} in {condition}: "
+                    f"given 2 observations of {n_obs} numbers (the {contestant.role}'s there), {what}"
+                ) from None
+
+
+def check_members(population: populations.Population) -> None:
+    """Refuse before anything is played a population whose members cannot play its condition
+    (weights of the other role, or of another team size): every member's agents are built."""
+    for member in population.members:
+        member.agents(population.condition, slots(population.condition, population.role))
 
 
 # ------------------------------------------------------------------ statistics
@@ -264,9 +309,9 @@ def crossed_interval(y: np.ndarray, confidence: float = CONFIDENCE) -> dict[str,
     members and the episodes as random draws (a crossed two-way random-effects design): the
     variance of the grand mean is ``σ²_m / M + σ²_e / E + σ²_r / (M E)``, estimated without bias by
     ``(MS_m + MS_e − MS_r) / (M E)`` from the two-way ANOVA's mean squares, with Satterthwaite's
-    degrees of freedom. One member: the t-interval over episodes. Its coverage, measured by
-    :func:`coverage` (docs/leaderboard.md), is 93–96 % from four members up and falls to 87–95 %
-    with two."""
+    degrees of freedom, at least :data:`DF_FLOOR`. One member: the t-interval over episodes. Its
+    coverage, measured by :func:`coverage` (docs/leaderboard.md), is 93–96 % from four members up
+    and falls to 87–95 % with two."""
     y = np.asarray(y, dtype=float)
     m, e = y.shape
     grand = float(y.mean())
@@ -287,11 +332,15 @@ def crossed_interval(y: np.ndarray, confidence: float = CONFIDENCE) -> dict[str,
     terms = [(ms_m, m - 1), (ms_e, e - 1), (-ms_r, df_r)]
     if ms_m + ms_e - ms_r <= 0:
         terms = terms[:2]
+    if ms_m + ms_e <= 0 < ms_r:  # every member's and every episode's mean the same, the rest not
+        terms = [(ms_r, df_r)]  # the residual's share alone, σ²_r / (M E), which the variance is at least
     total = sum(t for t, _ in terms)
     if total <= 0:  # every return the same
         return {"mean": grand, "ci": [grand, grand], "df": None, "se": 0.0}
     variance = total / (m * e)
-    df = total**2 / sum(t**2 / d for t, d in terms)
+    # Satterthwaite's df: never below the fewest of its terms' own when all are added, but the
+    # residual's subtracted term can take it towards 0, where the t quantile grows without bound
+    df = max(total**2 / sum(t**2 / d for t, d in terms), DF_FLOOR)
     se = float(np.sqrt(variance))
     half = float(stats.t.ppf(0.5 + confidence / 2, df)) * se
     return {"mean": grand, "ci": [grand - half, grand + half], "df": float(df), "se": se}
