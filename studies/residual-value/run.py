@@ -546,6 +546,7 @@ def main() -> int:
             "kinds": list(design.KINDS),
             "comparisons": [list(c) for c in design.COMPARISONS],
             "settings": {s: {"condition": c, "obstacles": n} for s, (c, n) in design.SETTINGS.items()},
+            "differs": design.DIFFERS,
             "command": "python studies/residual-value/run.py " + " ".join(sys.argv[1:]),
         }
         marker.write_text(json.dumps(about, indent=2) + "\n")
