@@ -121,7 +121,7 @@ def improvement(rows: list[dict[str, Any]], seed: int = 0, resamples: int = stat
     values in the condition's panels stay together); for rows of several comparisons, one such
     result per comparison (``pairs``)."""
     pairs = list(dict.fromkeys(pool.pair_of(r) for r in rows))
-    if pairs != PAIRS:
+    if len(pairs) > 1:
         return {
             "pairs": [
                 {"pair": list(p), **improvement([r for r in rows if pool.pair_of(r) == p], seed, resamples)}
