@@ -168,7 +168,7 @@ def test_a_tiny_run_of_the_driver_reuses_the_rule_study_s_runs(tmp_path: Path) -
             for budget in ("4", "8"):
                 assert {k: run["pool"][budget][k] for k in rule["pool"][budget]} == rule["pool"][budget]
         assert ("ladders" in run) == (run["kind"] != "flat")
-    assert "training them again" in (tmp_path / "work" / "progress.log").read_text()
+    assert "runs the rule study's folders lack" in (tmp_path / "work" / "progress.log").read_text()
     again = subprocess.run(command + options + ["--skip-build-check"], capture_output=True, text=True, timeout=600)
     assert again.returncode == 0 and "evaluating" not in again.stdout  # a rerun redoes nothing
 

@@ -1,6 +1,7 @@
 """The residual study's costs, measured and scaled (PLAN.md quotes what this writes).
 
     nice -n 10 python studies/residual-value/measure.py [--steps 40] [--out studies/residual-value/rates.json]
+    python studies/residual-value/measure.py --estimate      # PLAN.md's table, from both rates files
 
 What studies/rule-value/rates.json does not hold: the residual kind's training in the four plain
 conditions, and all three kinds' training with 4 obstacles in 1p-high and 2p-high-individual
@@ -41,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[2]
 PLAIN = ("1p-high", "2p-high-individual", "3p-low-individual", "3p-high-shared")
 OBSTACLES = 4
 WITH_OBSTACLES = ("1p-high", "2p-high-individual")
-KINDS = ("hierarchical", "residual", "flat")
+KINDS = ("residual", "hierarchical", "flat")
 #: The obstacle study's condition whose ratio stands in for one it did not train.
 OBSTACLE_PROXY = {"1p-high": "1p-high", "2p-high-individual": "2p-high-shared"}
 
@@ -94,11 +95,56 @@ def seconds_per_transition(condition: str, kind: str, steps: int, obstacles: int
     return (time.perf_counter() - start) / (steps * config.num_envs)
 
 
+def estimate() -> str:
+    """PLAN.md's cost table (markdown), from this study's rates and the rule study's
+    (studies/rule-value/rates.json: the hierarchical and flat runs, one evaluation's seconds). A
+    judged run trained here plays 13 members × 5 budgets; a reused one 4 × 5 and one check; a
+    residual or hierarchical run 300 episodes on each ladder rung (5 evaluations' worth each: 10
+    levels, 7 with obstacles); a residual run's corrections 200 episodes of one variant (about one
+    evaluation). With obstacles an evaluation is taken as the plain one × the hierarchical obstacle
+    ratio of episode lengths (not measured)."""
+    mine = json.loads((ROOT / "studies" / "residual-value" / "rates.json").read_text())["settings"]
+    rule = json.loads((ROOT / "studies" / "rule-value" / "rates.json").read_text())["conditions"]
+    lines = [
+        "| setting | residual run (h) | hierarchical run (h) | flat run (h) | one evaluation (s) | population (h) "
+        "| judged, 10 a kind (h) | 20 a kind (h) | 30 a kind (h) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    totals = np.zeros(4)
+    for setting in [*PLAIN, *(f"{c}-obstacles{OBSTACLES}" for c in WITH_OBSTACLES)]:
+        condition = setting.removesuffix(f"-obstacles{OBSTACLES}")
+        walled = setting != condition
+        hours = {k: (mine[setting] if walled else rule[condition]).get(k, {}).get("run_hours") for k in KINDS}
+        hours["residual"] = mine[setting]["residual"]["run_hours"]
+        evaluation = rule[condition]["evaluation_seconds"] * (
+            mine[setting]["hierarchical"]["obstacle_ratio"] if walled else 1.0
+        )
+        levels = 7 if walled else 10
+        trained_here = KINDS if walled else ("residual",)
+        population = sum(POPULATION_RUNS * hours[k] for k in trained_here)
+
+        train = sum(hours[k] for k in trained_here)  # a seed's runs trained here
+        plays = sum(65 if k in trained_here else 21 for k in KINDS) + 2 * levels * 5 + 1  # a seed's evaluations
+        row = [population, *(n * (train + plays * evaluation / 3600) for n in (10, 20, 30))]
+        totals += row
+        shown = " | ".join("—" if hours[k] is None else f"{hours[k]:.3f}" for k in KINDS)
+        lines.append(f"| {setting} | {shown} | {evaluation:.1f} | " + " | ".join(f"{v:.2f}" for v in row) + " |")
+    lines.append("| **all** | | | | | " + " | ".join(f"**{v:.1f}**" for v in totals) + " |")
+    return "\n".join(lines) + "\n"
+
+
+POPULATION_RUNS = 4
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--steps", type=int, default=40)
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--estimate", action="store_true", help="Print PLAN.md's cost table and stop.")
     args = parser.parse_args()
+    if args.estimate:
+        print(estimate(), end="")
+        return
     torch.set_num_threads(1)
     plan = [(c, "residual", 0) for c in PLAIN] + [(c, k, OBSTACLES) for c in WITH_OBSTACLES for k in KINDS]
     rows: dict[str, Any] = {}

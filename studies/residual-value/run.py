@@ -50,7 +50,14 @@ def log(work: Path, line: str) -> None:
 
 def build() -> dict[str, str]:
     """The commit and the fingerprint of the package's tracked .py files, as the rule study's
-    driver computes them; refuses uncommitted package code and any code but the rule study's."""
+    driver computes them; refuses uncommitted package code, any code but the rule study's, and a
+    package imported from another checkout than this one (PYTHONPATH)."""
+    import pursuit_bench
+
+    if ROOT not in Path(pursuit_bench.__file__).resolve().parents:
+        raise SystemExit(
+            f"pursuit_bench is imported from {pursuit_bench.__file__}, not {ROOT}: export PYTHONPATH={ROOT}"
+        )
     dirty = subprocess.run(
         ["git", "status", "--porcelain", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
     ).stdout
@@ -194,9 +201,12 @@ def write_population(args: Any, setting: str, current: dict[str, str]) -> Path:
 
 
 def population(args: Any, stop: list[bool], settings: list[str], current: dict[str, str]) -> list[str]:
-    """Train every setting's members this study trains, then write each setting's population
-    whose sources are all there; returns what it waits for (the rule study's population)."""
-    waiting = []
+    """Train every setting's members this study trains, then write each setting's population;
+    returns what it waits for: nothing is trained before the rule study's population of every
+    plain setting is there."""
+    rules = [args.rule_population / design.condition_of(s) / "population.json" for s in settings if design.plain(s)]
+    if missing := [str(path) for path in rules if not path.exists()]:
+        return [f"the rule study's population ({', '.join(missing)})"]
     for setting in settings:
         for kind in design.trained_here(setting, "population"):
             seeds = design.population_seeds(kind)
@@ -205,14 +215,9 @@ def population(args: Any, stop: list[bool], settings: list[str], current: dict[s
             if not sweep(folder, plan_for(setting, (kind,), seeds.start, len(seeds), args, ()), args, stop):
                 return ["stop"]
     for setting in settings:
-        if (population_folder(args, setting) / "population.json").exists():
-            continue
-        rule = args.rule_population / design.condition_of(setting) / "population.json"
-        if design.plain(setting) and not rule.exists():
-            waiting.append(f"{setting}: the rule study's population ({rule})")
-            continue
-        log(args.work, f"population of {setting} written to {write_population(args, setting, current).parent}")
-    return waiting
+        if not (population_folder(args, setting) / "population.json").exists():
+            log(args.work, f"population of {setting} written to {write_population(args, setting, current).parent}")
+    return []
 
 
 # --- evaluation ---------------------------------------------------------------------------------
@@ -426,26 +431,26 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
         for seed in range(first, first + step):
             for kind in mine:
                 sources[(kind, seed)] = (folder / "runs" / f"{setting}-{kind}-seed{seed}", None)
-        if design.plain(setting):
+        if design.plain(setting):  # the rule study's hierarchical and flat runs, reused or trained again
             retrain = args.work / f"retrained-{setting}-from{first}"
             reference = plan_for(setting, ("hierarchical", "flat"), first, step, args, keep)
             found = {
-                (kind, seed): rule_folder(args, setting, kind, seed)
+                (kind, seed): rule_folder(args, setting, kind, seed) if seed < floor else None
                 for kind in ("hierarchical", "flat")
                 for seed in range(first, first + step)
             }
-            if None in found.values():  # gone with the machine: trained again by the same build (exact)
-                log(args.work, f"{setting}: some of the rule study's run folders are gone; training them again")
+            if None in found.values():  # gone with the machine, or seeds the rule study has not: trained here
+                log(args.work, f"{setting}: training hierarchical and flat runs the rule study's folders lack")
                 if not sweep(retrain, reference, args, stop):
                     return "stop"
             for (kind, seed), run in found.items():
                 name = f"{setting}-{kind}-seed{seed}"
-                earlier = args.rule_results / "runs" / f"{name}.json.gz"
-                if not earlier.exists():  # the rule study's count says it is there: a lost file
+                earlier = args.rule_results / "runs" / f"{name}.json.gz" if seed < floor else None
+                if earlier is not None and not earlier.exists():  # the rule study's count says it is there
                     raise SystemExit(f"{earlier}: missing, though the rule study's seed rule counts it")
                 run = run or retrain / "runs" / name
                 check_same_configuration(run, reference.runs()[name])
-                sources[(kind, seed)] = (run, str(earlier))
+                sources[(kind, seed)] = (run, None if earlier is None else str(earlier))
         jobs = []
         for (kind, seed), (run, earlier_path) in sorted(sources.items(), key=lambda x: (x[0][1], x[0][0])):
             name = f"{setting}-{kind}-seed{seed}"
@@ -553,7 +558,9 @@ def main() -> int:
     log(args.work, f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}")
     while True:
         waiting = population(args, stop, settings, current)
-        states = ["stop"] if waiting == ["stop"] else [judged(args, stop, s, current) for s in settings]
+        states = (
+            ["stop"] if waiting == ["stop"] else [] if waiting else [judged(args, stop, s, current) for s in settings]
+        )
         if stop[0] or "stop" in states:
             log(args.work, "stopped: rerun the same command to resume")
             return 143
