@@ -14,6 +14,7 @@ from types import ModuleType
 
 import pytest
 
+from pursuit_bench import pretrained
 from pursuit_bench.study import rule_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -193,3 +194,61 @@ def test_the_driver_refuses_other_code_than_the_rule_study_s(tmp_path: Path) -> 
     assert done.returncode != 0
     assert "not the rule study's build" in done.stderr or "uncommitted code changes" in done.stderr
     assert not (tmp_path / "r").exists() and not (tmp_path / "p").exists()
+
+
+@pytest.mark.slow
+def test_a_tiny_run_of_an_obstacle_setting_trains_its_own_population_and_all_three_kinds(tmp_path: Path) -> None:
+    """An obstacle setting needs nothing of the rule study: its 12 learned members and the judged
+    runs of all three kinds are trained here with the obstacles; a SIGTERM stops the driver
+    cleanly (143) and the same command finishes the study."""
+    import signal
+    import time
+
+    options = ["--preset", "quick", "--episodes", "8", "--budgets", "4,8", "--eval-episodes", "2", "--num-envs", "2"]
+    options += ["--checkpoint-every", "4", "--first", "1", "--step", "1", "--most", "1", "--skip-build-check"]
+    where = [f"--{k}={tmp_path / k}" for k in ("work", "results", "population", "rule-work", "rule-results")]
+    where.append(f"--rule-population={tmp_path / 'none'}")  # the rule study is not needed here
+    command = [sys.executable, str(STUDY / "run.py"), "--workers", "1", "--settings", "1p-high-obstacles4"]
+    command += ["--poll", "0", *where, *options]
+    log = tmp_path / "work" / "progress.log"
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not (log.exists() and "trained 1p-high-obstacles4" in log.read_text()):
+            assert process.poll() is None and time.monotonic() < deadline, (
+                process.stderr.read() if process.stderr else ""
+            )
+            time.sleep(0.2)
+        process.send_signal(signal.SIGTERM)
+        assert process.wait(timeout=300) == 143
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert "stopped: rerun the same command to resume" in log.read_text()
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    index = json.loads(
+        (tmp_path / "population" / "residual-study-obstacles4" / "1p-high" / "population.json").read_text()
+    )
+    assert index["obstacles"] == 4 and [m["name"] for m in index["members"]] == [
+        m["name"] for m in design.members("1p-high")
+    ]
+    member = tmp_path / "population" / "residual-study-obstacles4" / "1p-high" / "flat-seed1004" / "prey_0.safetensors"
+    header = json.loads(pretrained.read(member)[1]["training"])
+    assert header["obstacles"] == 4 and header["seed"] == 1004 and header["predator"] == "flat"
+    results = {p.name: json.loads(gzip.decompress(p.read_bytes())) for p in (tmp_path / "results" / "runs").iterdir()}
+    assert sorted(results) == sorted(f"1p-high-obstacles4-{k}-seed0.json.gz" for k in design.KINDS)
+    for run in results.values():
+        assert run["setting"] == "1p-high-obstacles4" and run["obstacles"] == 4 and len(run["pool"]["8"]) == 13
+        assert set(run["evaluated_by"].values()) == {"residual-study"}
+        if "ladders" in run:  # no obstacles ladder for runs trained with obstacles
+            assert sorted(run["ladders"]) == [
+                "delay=1",
+                "delay=3",
+                "delay=6",
+                "none",
+                "obs-noise=0.02",
+                "obs-noise=0.05",
+                "obs-noise=0.1",
+            ]

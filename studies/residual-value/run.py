@@ -461,14 +461,18 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
             jobs.append((name, job))
         if jobs:
             log(args.work, f"{setting}: evaluating {len(jobs)} runs against the population")
-            run_jobs(
-                jobs,
-                judge,
-                args.work / "evaluation-parts",
-                {"build": current["code"]},
-                workers=args.workers,
-                progress=lambda n, total, s=setting: log(args.work, f"{s}: {n} of {total} evaluations"),
-            )
+            try:
+                run_jobs(
+                    jobs,
+                    judge,
+                    args.work / "evaluation-parts",
+                    {"build": current["code"]},
+                    workers=args.workers,
+                    progress=lambda n, total, s=setting: log(args.work, f"{s}: {n} of {total} evaluations"),
+                )
+            except ValueError as error:  # a reused run that does not replay as the rule study's, say
+                log(args.work, f"stopped: {error}")
+                raise SystemExit(str(error)) from None
         if stop[0]:
             return "stop"
         first += step
