@@ -223,6 +223,25 @@ def population(args: Any, stop: list[bool], settings: list[str], current: dict[s
 # --- evaluation ---------------------------------------------------------------------------------
 
 
+def load_member(path: Path) -> Any:
+    """One member's prey from its safetensors file, greedy by default: ``rule_study.load_member``,
+    which sizes the observation without obstacles, but with the range readings where the member
+    trained with obstacles (as ``runs.described`` builds a run's agents)."""
+    from pursuit_bench import pretrained
+    from pursuit_bench.agents.kinds import LearningAgent
+    from pursuit_bench.env.task import obs_size
+    from pursuit_bench.training.train import TrainConfig, build_agents
+
+    weights, header = pretrained.read(path)
+    config = TrainConfig.from_dict(json.loads(header["training"]))
+    _, (agents,) = build_agents([config], [obs_size(config.task.n_agents, config.obstacles > 0)])
+    prey = agents[header["agent"]]
+    if not isinstance(prey, LearningAgent) or prey.kind != header.get("kind"):
+        raise ValueError(f"{path}: holds a {header.get('kind')} agent, not a learning prey")
+    prey.learner.load_member_weights(prey.member, weights)
+    return prey
+
+
 def play(
     folder: Path, where: Path, opponents: list[dict[str, Any]], budgets: list[int], episodes: int
 ) -> dict[str, Any]:
@@ -231,7 +250,6 @@ def play(
     population is fixed to the rule study's nine), so a member's evaluation is the same here and there."""
     from pursuit_bench.agents.kinds import ScriptedAgent
     from pursuit_bench.rules.policies import FleeingPrey
-    from pursuit_bench.study import rule_study
     from pursuit_bench.training import runs
     from pursuit_bench.training.evaluate import evaluate_agents
 
@@ -246,7 +264,7 @@ def play(
                 prey: Any = ScriptedAgent("prey_0", FleeingPrey(obstacles=bool(config.task_options.get("obstacles"))))
                 protocol["prey_epsilon"] = None
             else:
-                prey = rule_study.load_member(where / member["files"]["prey_0"])
+                prey = load_member(where / member["files"]["prey_0"])
             result = evaluate_agents(
                 config.condition,
                 {**{k: v for k, v in agents.items() if k != "prey_0"}, "prey_0": prey},
