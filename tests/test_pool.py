@@ -152,6 +152,32 @@ def test_pool_on_a_tiny_sweep_judges_both_kinds_against_the_same_opponents(tmp_p
     assert code == 2 and "given twice" in output and not (tmp_path / "twice" / "pool-parts").exists()
 
 
+@pytest.mark.slow
+def test_pool_on_a_tiny_sweep_of_three_kinds_compares_them_pairwise(tmp_path: Path) -> None:
+    sweep, out = tmp_path / "sweep", tmp_path / "pool"
+    code, output = run_cli(
+        "sweep", "--conditions", "1p-low", "--seeds", "3", "--predators", "hierarchical,flat,residual",
+        "--episodes", "8", "--keep-checkpoints", "4", "--eval-episodes", "2", "--num-envs", "2", "--no-record",
+        "--workers", "1", "--out", str(sweep),
+    )  # fmt: skip
+    assert code == 0, output
+    code, output = run_cli("pool", str(sweep), "--out", str(out), "--pool-seeds", "2", "--episodes", "2",
+                           "--cross-episodes", "2", "--workers", "1")  # fmt: skip
+    assert code == 0, output
+    result = json.loads((out / "pool.json").read_text())
+    assert result["pools"]["1p-low"] == [
+        "FleeingPrey",
+        *(f"1p-low-{k}-seed2" for k in ("flat", "hierarchical", "residual")),
+    ]
+    judged = next(r for r in result["runs"] if r["name"] == "1p-low-residual-seed0")
+    assert set(judged["cross"]) == {"own", "other kind: flat", "other kind: hierarchical"}
+    summary = json.loads((out / "pool-report.json").read_text())
+    assert [r["pair"] for r in summary["budgets"][-1]["return"]["panels"]] == [
+        ["residual", "hierarchical"], ["residual", "flat"], ["hierarchical", "flat"],
+    ]  # fmt: skip
+    assert "residual − flat" in (out / "pool.md").read_text() and "| pool return |" in output
+
+
 def test_reproduction_md_prints_what_the_committed_pool_results_give(tmp_path: Path) -> None:
     root = Path(__file__).resolve().parents[1]
     result = pool.load(root / "results" / "pool" / "pool.json")
