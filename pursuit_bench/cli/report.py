@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import click
 
@@ -81,19 +80,16 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
     from the judged runs' compact results (runs/)."""
     from pursuit_bench.study import rule_report
 
-    options: dict[str, Any] = {}
+    kinds, pairs, differs = rule_report.KINDS, rule_report.PAIRS, rule_report.statistics.EQUIVALENCE_MARGIN
     if stem != "rule-study":
         try:
             about = json.loads((where / f"{stem}.json").read_text())
-            options = {
-                "kinds": tuple(about["kinds"]),
-                "pairs": [(a, b) for a, b in about["comparisons"]],
-                "differs": float(about.get("differs", rule_report.statistics.EQUIVALENCE_MARGIN)),
-            }
+            kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
+            differs = float(about.get("differs", differs))
         except (ValueError, KeyError, TypeError) as error:
             raise BadInput(f"{where / (stem + '.json')}: expected kinds and comparisons ({error})") from None
     try:
-        summary = rule_report.write_report(where, out, stem, **options)
+        summary = rule_report.write_report(where, out, stem, kinds, pairs, differs)
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")
