@@ -77,6 +77,16 @@ def test_the_plan_lists_what_the_protocol_says() -> None:
     assert f"`{design.RULE_STUDY_CODE}`" in protocol  # the build it runs on, named in the protocol
 
 
+def test_the_build_is_the_rule_study_s() -> None:
+    """The build the driver insists on is the one the rule study records (studies/rule-value/build.json,
+    where the checkout has it)."""
+    recorded = ROOT / "studies" / "rule-value" / "build.json"
+    if not recorded.exists():
+        pytest.skip("no studies/rule-value/build.json in this checkout")
+    build = json.loads(recorded.read_text())
+    assert (build["code"], build["commit"]) == (design.RULE_STUDY_CODE, design.RULE_STUDY_COMMIT)
+
+
 def _run(seed: int, kind: str, margin: float) -> dict:
     """A compact result whose every member gives ``margin`` (the trained return over the baselines)."""
     panels = {"predator_0": [margin, 0.0, 0.0]}
