@@ -152,6 +152,32 @@ def test_pool_on_a_tiny_sweep_judges_both_kinds_against_the_same_opponents(tmp_p
     assert code == 2 and "given twice" in output and not (tmp_path / "twice" / "pool-parts").exists()
 
 
+@pytest.mark.slow
+def test_pool_on_a_tiny_sweep_of_three_kinds_compares_them_pairwise(tmp_path: Path) -> None:
+    sweep, out = tmp_path / "sweep", tmp_path / "pool"
+    code, output = run_cli(
+        "sweep", "--conditions", "1p-low", "--seeds", "3", "--predators", "hierarchical,flat,residual",
+        "--episodes", "8", "--keep-checkpoints", "4", "--eval-episodes", "2", "--num-envs", "2", "--no-record",
+        "--workers", "1", "--out", str(sweep),
+    )  # fmt: skip
+    assert code == 0, output
+    code, output = run_cli("pool", str(sweep), "--out", str(out), "--pool-seeds", "2", "--episodes", "2",
+                           "--cross-episodes", "2", "--workers", "1")  # fmt: skip
+    assert code == 0, output
+    result = json.loads((out / "pool.json").read_text())
+    assert result["pools"]["1p-low"] == [
+        "FleeingPrey",
+        *(f"1p-low-{k}-seed2" for k in ("flat", "hierarchical", "residual")),
+    ]
+    judged = next(r for r in result["runs"] if r["name"] == "1p-low-residual-seed0")
+    assert set(judged["cross"]) == {"own", "other kind: flat", "other kind: hierarchical"}
+    summary = json.loads((out / "pool-report.json").read_text())
+    assert [r["pair"] for r in summary["budgets"][-1]["return"]["panels"]] == [
+        ["residual", "hierarchical"], ["residual", "flat"], ["hierarchical", "flat"],
+    ]  # fmt: skip
+    assert "residual − flat" in (out / "pool.md").read_text() and "| pool return |" in output
+
+
 def test_reproduction_md_prints_what_the_committed_pool_results_give(tmp_path: Path) -> None:
     root = Path(__file__).resolve().parents[1]
     result = pool.load(root / "results" / "pool" / "pool.json")
@@ -170,3 +196,70 @@ def test_reproduction_md_prints_what_the_committed_pool_results_give(tmp_path: P
     assert code == 0, output
     assert (tmp_path / "pool.md").read_text() == (root / "docs" / "figures" / "pool" / "pool.md").read_text()
     assert (tmp_path / "pool.png").read_bytes() == (root / "docs" / "figures" / "pool" / "pool.png").read_bytes()
+
+
+def test_three_kinds_are_planned_and_compared_pairwise_against_an_independent_computation() -> None:
+    """A pool study of the residual, hierarchical and flat kinds: every kind's pool seeds in the pool,
+    each judged run in cross-kind play against both other kinds' prey; at every budget every
+    (panel, comparison) one Holm family, checked against scipy's Welch test and Holm written out."""
+    sources = [
+        {"name": f"1p-low-{k}-seed{s}", "condition": "1p-low", "kind": k, "seed": s, "folder": f"f/{k}{s}"}
+        for k in ("flat", "residual", "hierarchical")
+        for s in range(5)
+    ]
+    layout = pool.plan(sources, pool_seeds=(3, 4))
+    assert (
+        sorted(m["kind"] for m in layout["pools"]["1p-low"]) == ["flat"] * 2 + ["hierarchical"] * 2 + ["residual"] * 2
+    )
+    crossed = dict(pool._jobs(layout, [10, 20], 5, 7, 0))["1p-low-residual-seed0|cross"][2]
+    assert crossed == [
+        ("own", "f/residual0"),
+        ("other kind: flat", "f/flat0"),
+        ("other kind: hierarchical", "f/hierarchical0"),
+    ]
+    with pytest.raises(ValueError, match="compares two kinds or more"):
+        pool.plan([s for s in sources if s["kind"] == "residual"], (3, 4))
+    truth = {"hierarchical": 0.3, "residual": 0.5, "flat": 0.31}  # residual ahead of both; the others alike
+    rng = np.random.default_rng(4)
+    runs = []
+    for kind, mean in truth.items():
+        for seed in range(8):
+            at = {}
+            for budget in ("10", "20"):
+                value = mean + rng.normal(0, 0.02)
+                evaluation = {"panels": {"predator_0": [value, 0.0, 0.1]}, "stderr": {"predator_0": 0.01}}
+                at[budget] = {"FleeingPrey": evaluation, "m": evaluation}
+            own = {"panels": {"predator_0": [mean, 0.0, 0.1]}}
+            cross = {"own": own, **{f"other kind: {o}": own for o in truth if o != kind}}
+            runs.append(
+                {"name": f"{kind}{seed}", "condition": "1p-low", "kind": kind, "seed": seed, "pool": at, "cross": cross}
+            )
+    summary = pool.summarise(
+        {"budgets": [10, 20], "episodes": 5, "cross_episodes": 7, "seed": 0, "pools": {}, "runs": runs}
+    )
+    pairs = [("residual", "hierarchical"), ("residual", "flat"), ("hierarchical", "flat")]
+    for entry in summary["budgets"]:
+        rows = entry["return"]["panels"]
+        assert [tuple(r["pair"]) for r in rows] == pairs
+        raw = []
+        for a, b in pairs:
+            values = {
+                k: [r["pool"][str(entry["episodes"])]["m"]["panels"]["predator_0"][0] for r in runs if r["kind"] == k]
+                for k in (a, b)
+            }
+            raw.append(stats.ttest_ind(values[a], values[b], equal_var=False).pvalue)
+        m, order = len(raw), np.argsort(raw)
+        holm, running = [0.0] * m, 0.0
+        for rank, i in enumerate(order):
+            running = max(running, min(1.0, (m - rank) * raw[i]))
+            holm[i] = running
+        assert [r["difference"]["p_holm"] for r in rows] == pytest.approx(holm)
+        assert [r["verdict"] for r in rows][:2] == ["residual better than hierarchical", "residual better than flat"]
+        assert rows[2]["verdict"] in ("equivalent", "not resolved", "rule helps", "flat better")
+        assert sum(entry["return"]["counts"].values()) == 3
+    assert [p["pair"] for p in summary["improvement"]["return"]] == [list(p) for p in pairs]
+    assert summary["improvement"]["return"][0]["value"] == 1.0
+    assert len(summary["cross_kind"]) == 6 and {r["other_kind"] for r in summary["cross_kind"]} == set(truth)
+    assert set(summary["curves"]["1p-low"]) == set(truth)
+    text = pool.markdown(summary)
+    assert "| 1p-low | predator_0 | residual − flat |" in text and "residual (prey of flat)" in text

@@ -158,3 +158,145 @@ def test_the_report_command_regenerates_byte_for_byte(tmp_path: Path) -> None:
     (where / "runs" / "broken.json.gz").write_bytes(b"")
     code, output = run_cli("report", str(where))
     assert code != 0
+
+
+#: (setting, predator): the true pool return of hierarchical, residual and flat runs
+TRUTH3 = {
+    ("1p-high", "predator_0"): (0.30, 0.50, 0.10),  # residual ahead of both
+    ("1p-high-obstacles4", "predator_0"): (0.40, 0.40, 0.40),  # all alike
+    ("2p-high-individual", "predator_0"): (0.30, 0.31, 0.60),  # residual as hierarchical, behind flat
+    ("2p-high-individual", "predator_1"): (0.20, 0.26, 0.20),  # close: decided by the data
+}
+KINDS3 = ("hierarchical", "residual", "flat")
+PAIRS3 = [("residual", "hierarchical"), ("residual", "flat")]
+
+
+def three_kind_runs(n: int = 8, seed: int = 1) -> list[dict]:
+    """Runs of three kinds in the residual study's layout (a setting, obstacles), pool return the
+    truth plus noise (sd 0.02), the same against every member, the fixed modes 0.25 and 0.5 below
+    the hierarchical truth; the residual and hierarchical runs
+    carry ladders (the residual kind losing 0.1 less margin under obs-noise=0.1 than the
+    hierarchical one, seed by seed) and the residual ones their corrections."""
+    rng = np.random.default_rng(seed)
+    runs = []
+    for setting in dict.fromkeys(s for s, _ in TRUTH3):
+        condition, obstacles = ("1p-high", 4) if setting.endswith("obstacles4") else (setting, 0)
+        for k, kind in enumerate(KINDS3):
+            for s in range(n):
+                pool: dict[str, dict] = {}
+                for budget in (1500, 15000):
+                    panels = {}
+                    for (where, predator), truth in TRUTH3.items():
+                        if where == setting:
+                            value = truth[k] + rng.normal(0, 0.02)
+                            panels[predator] = [value, truth[0] - 0.5, truth[0] - 0.25]  # the fixed modes alike
+                    evaluation = {"panels": panels, "stderr": dict.fromkeys(panels, 0.02), "capture_rate": 0.5}
+                    pool[str(budget)] = {m: evaluation for m in MEMBERS}
+                run = {"format": rule_study.FORMAT, "name": f"{setting}-{kind}-seed{s}", "condition": condition,
+                       "setting": setting, "obstacles": obstacles, "kind": kind, "seed": s, "build": "abc",
+                       "protocol": "crn-1", "episodes": 60, "pool": pool}  # fmt: skip
+                if kind != "flat":
+                    base = rng.normal(0.2, 0.05)
+                    drop = 0.3 - (0.1 if kind == "residual" else 0.0) + rng.normal(0, 0.02)
+                    run["ladders"] = {"none": {"margin": base}, "obs-noise=0.1": {"margin": base - drop},
+                                      "delay=3": {"margin": base - 0.1 + rng.normal(0, 0.02)}}  # fmt: skip
+                if kind == "residual":
+                    run["corrections"] = {p: {"corrected": 0.01 * s, "correction_by_distance": {}} for p in panels}
+                runs.append(run)
+    return runs
+
+
+def _holm(values: list[float]) -> list[float]:
+    m, order = len(values), np.argsort(values)
+    adjusted, running = [0.0] * m, 0.0
+    for rank, i in enumerate(order):
+        running = max(running, min(1.0, (m - rank) * values[i]))
+        adjusted[i] = running
+    return adjusted
+
+
+def test_three_kinds_are_compared_pairwise_in_one_holm_family_a_budget() -> None:
+    runs = three_kind_runs()
+    summary = rule_report.summarise(runs, kinds=KINDS3, pairs=PAIRS3)
+    for budget, rows in [
+        ("15000", summary["primary"]["panels"]),
+        ("1500", summary["secondary"]["budgets"][0]["panels"]),
+    ]:
+        assert [(r["condition"], r["predator"], tuple(r["pair"])) for r in rows] == [
+            (s, p, pair) for s, p in TRUTH3 for pair in PAIRS3
+        ]  # the settings in the paper's order, the obstacle one after its plain condition
+        p, p_equivalent, means = [], [], []
+        for row in rows:  # Welch and TOST by scipy, Holm written out: not the code under test
+            a, b = ([np.mean([e["panels"][row["predator"]][0] for e in r["pool"][budget].values()])
+                     for r in runs if (r["setting"], r["kind"]) == (row["condition"], kind)]
+                    for kind in row["pair"])  # fmt: skip
+            p.append(stats.ttest_ind(a, b, equal_var=False).pvalue)
+            upper = stats.ttest_ind(np.array(a) - 0.05, b, equal_var=False, alternative="less").pvalue
+            lower = stats.ttest_ind(np.array(a) + 0.05, b, equal_var=False, alternative="greater").pvalue
+            p_equivalent.append(max(upper, lower))
+            means.append(np.mean(a) - np.mean(b))
+        for row, ph, pe, mean in zip(rows, _holm(p), _holm(p_equivalent), means, strict=True):
+            first, second = row["pair"]
+            expected = (
+                (f"{first} better than {second}" if mean > 0 else f"{first} worse than {second}") if ph <= 0.05
+                else "equivalent" if pe <= 0.025 else "not resolved"
+            )  # fmt: skip
+            assert row["verdict"] == expected
+            assert row["difference"]["p_holm"] == pytest.approx(ph)
+            assert row["equivalence"]["p_holm"] == pytest.approx(pe)
+    verdicts = {(r["condition"], r["predator"], tuple(r["pair"])): r["verdict"] for r in summary["primary"]["panels"]}
+    assert verdicts[("1p-high", "predator_0", PAIRS3[0])] == "residual better than hierarchical"
+    assert verdicts[("1p-high", "predator_0", PAIRS3[1])] == "residual better than flat"
+    assert verdicts[("1p-high-obstacles4", "predator_0", PAIRS3[0])] == "equivalent"
+    assert verdicts[("2p-high-individual", "predator_0", PAIRS3[0])] == "equivalent"
+    assert verdicts[("2p-high-individual", "predator_0", PAIRS3[1])] == "residual worse than flat"
+    counts = summary["primary"]["counts"]
+    assert sum(counts.values()) == 8 and counts["residual better than flat"] >= 1
+    assert counts["residual − hierarchical: equivalent"] >= 2
+    # the probability of improvement, one result a comparison
+    poi = summary["secondary"]["improvement"]["pairs"]
+    assert [p["pair"] for p in poi] == [list(p) for p in PAIRS3] and poi[0]["panels"][0]["value"] == 1.0
+    # reliability: every kind's share; both comparisons tested, one Holm family of 8
+    reliability = summary["secondary"]["reliability"]
+    assert [len(r["differences"]) for r in reliability] == [2] * 4 and all(
+        r["residual"]["failed"] == 0 for r in reliability
+    )
+    # the ladders: residual − hierarchical of the change of margin, paired by seed, Holm per ladder
+    families = summary["secondary"]["ladders"]
+    assert set(families) == {"obs-noise", "delay"} and all(len(f["cells"]) == 3 for f in families.values())
+    for ladder, level in (("obs-noise", "obs-noise=0.1"), ("delay", "delay=3")):
+        raw = []
+        for cell in families[ladder]["cells"]:
+            a, b = ([r["ladders"][level]["margin"] - r["ladders"]["none"]["margin"] for r in
+                     sorted((r for r in runs if (r["setting"], r["kind"]) == (cell["setting"], kind)),
+                            key=lambda r: r["seed"])] for kind in ("residual", "hierarchical"))  # fmt: skip
+            raw.append(stats.ttest_rel(a, b).pvalue)
+            assert cell["difference"]["mean"] == pytest.approx(np.mean(np.subtract(a, b)))
+        assert [c["difference"]["p_holm"] for c in families[ladder]["cells"]] == pytest.approx(_holm(raw))
+    assert all(c["difference"]["mean"] == pytest.approx(0.1, abs=0.03) for c in families["obs-noise"]["cells"])
+    # the corrections: a residual run differs where its margin is 0.05 from its seed's hierarchical run's
+    corrections = {(r["setting"], r["seed"]): r for r in summary["secondary"]["corrections"]}
+    assert len(corrections) == 3 * 8
+    assert all(r["differs"] for (s, _), r in corrections.items() if s == "1p-high")  # 0.2 ahead
+    assert not any(r["differs"] for (s, _), r in corrections.items() if s == "1p-high-obstacles4")
+    assert corrections[("1p-high", 3)]["corrected"] == {"predator_0": 0.03}
+
+
+def test_the_residual_study_s_folder_is_reported_by_the_command(tmp_path: Path) -> None:
+    where = tmp_path / "residual-study"
+    for run in three_kind_runs(n=4):
+        extra = {k: run[k] for k in ("protocol", "episodes", "pool", "setting", "obstacles")}
+        extra.update({k: run[k] for k in ("ladders", "corrections") if k in run})
+        rule_study.write_run(where / "runs", run["name"], run["condition"], run["kind"], run["seed"], "abc", extra)
+    about = {"kinds": list(KINDS3), "comparisons": [list(p) for p in PAIRS3], "differs": 0.05}
+    (where / "residual-study.json").write_text(json.dumps(about) + "\n")
+    code, output = run_cli("report", str(where))
+    assert code == 0, output
+    assert "primary, pool return at 15000 episodes:" in output and "residual better than hierarchical" in output
+    first = {n: (where / n).read_bytes() for n in ("residual-study-report.json", "residual-study.md")}
+    assert "## Secondary: the robustness ladders" in first["residual-study.md"].decode()
+    assert run_cli("report", str(where))[0] == 0
+    assert first == {n: (where / n).read_bytes() for n in first}  # regenerated byte for byte
+    (where / "residual-study.json").write_text("{}\n")
+    code, output = run_cli("report", str(where))
+    assert code == 2 and "expected kinds and comparisons" in output

@@ -1,5 +1,6 @@
-"""``pursuit-bench pool``: the hierarchical and the flat predator of a sweep judged against one pool
-of opponents at every kept budget (:mod:`pursuit_bench.study.pool`).
+"""``pursuit-bench pool``: the learned predator kinds of a sweep (hierarchical, flat, residual: any
+two or more) judged against one pool of opponents at every kept budget, pairwise
+(:mod:`pursuit_bench.study.pool`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import click
 from pursuit_bench.cli.options import BadInput, OutFolder, check_out_folder
 
 
-@click.command(short_help="Hierarchical against flat, both judged against one pool of opponents.")
+@click.command(short_help="Predator kinds compared pairwise, each judged against one pool of opponents.")
 @click.argument("sweeps", metavar="SWEEP...", type=click.Path(path_type=Path), nargs=-1, required=True)
 @click.option("--out", type=OutFolder(), required=True, help="Folder for pool.json and its report.")
 @click.option(
@@ -42,10 +43,11 @@ def pool(
     seed: int,
     workers: int | None,
 ) -> None:
-    """Judge the hierarchical and the flat runs of SWEEP (one sweep of both kinds, or one of each)
-    against a common pool: FleeingPrey and the prey of the pool seeds' runs of both kinds, at every
-    budget the sweep kept a checkpoint for, by the paper's protocol; and each run in cross-kind
-    play (its predators against the other kind's prey of the same seed). Writes pool.json (every
+    """Judge the learned kinds' runs of SWEEP (hierarchical, flat, residual: one sweep of every kind,
+    or one a kind) against a common pool: FleeingPrey and the prey of the pool seeds' runs of every
+    kind, at every budget the sweep kept a checkpoint for, by the paper's protocol, each kind against
+    every other (Holm over a budget's panels and comparisons); and each run in cross-kind play (its
+    predators against each other kind's prey of the same seed). Writes pool.json (every
     evaluation), pool-report.json, pool.md and pool.png into --out; each evaluation is kept as it
     finishes (pool-parts/): rerunning the command goes on where it stopped. `pursuit-bench report
     OUT` rewrites the report from pool.json."""
@@ -96,8 +98,9 @@ def pool(
 
 
 def _sources(sweeps: tuple[Path, ...]) -> tuple[list[dict[str, Any]], list[int], list[int]]:
-    """The hierarchical and flat runs of the sweeps (each finished, with every kept checkpoint),
+    """The learned kinds' runs of the sweeps (each finished, with every kept checkpoint),
     their common budgets (two or more: learning against budget needs them) and seeds."""
+    from pursuit_bench.study.pool import ORDER
     from pursuit_bench.training import runs
     from pursuit_bench.training.sweep import PLAN, SweepPlan, run_status
 
@@ -117,7 +120,7 @@ def _sources(sweeps: tuple[Path, ...]) -> tuple[list[dict[str, Any]], list[int],
         budgets = mine
         seeds |= set(range(plan.seeds))
         for name, config in sorted(plan.runs().items()):
-            if config.predator not in ("hierarchical", "flat"):
+            if config.predator not in ORDER:
                 continue
             folder = where / "runs" / name
             try:

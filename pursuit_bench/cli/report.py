@@ -22,7 +22,9 @@ def report(where: Path, out: Path | None) -> None:
     panels' verdicts, paired differences, per-seed counts, power), fig2.png, forest.png,
     counts.png, curves.png and budget.png. On a RUN folder: its learning curves (curves.png) and a summary.
     On a pool study's folder (pool.json, from `pursuit-bench pool`): pool-report.json, pool.md, pool.png.
-    On the rule study's folder (rule-study.json, runs/): rule-study-report.json, rule-study.md, rule-study.png."""
+    On the rule study's folder (rule-study.json, runs/): rule-study-report.json, rule-study.md, rule-study.png.
+    On the residual study's (residual-study.json, runs/): residual-study-report.json, .md and .png, its kinds
+    compared pairwise as residual-study.json names them."""
     if not where.is_dir():  # before the statistics and the figures are imported: a refusal comes at once
         raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
     from pursuit_bench.study import report as reports
@@ -37,6 +39,9 @@ def report(where: Path, out: Path | None) -> None:
         return
     if (where / "rule-study.json").is_file():
         _report_rule_study(where, out or where)
+        return
+    if (where / "residual-study.json").is_file():
+        _report_rule_study(where, out or where, "residual-study")
         return
     try:
         if out is not None:
@@ -69,16 +74,26 @@ def _report_pool(where: Path, out: Path) -> None:
     click.echo(f"written in {out}: pool-report.json, pool.md, pool.png")
 
 
-def _report_rule_study(where: Path, out: Path) -> None:
-    """The rule study (issue 47): its report from the judged runs' compact results (runs/)."""
+def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None:
+    """The rule study (issue 47), or a study of more kinds in its format (``stem``.json names the
+    kinds, the comparisons and how far a run's margin must be from its twin's to differ): its report
+    from the judged runs' compact results (runs/)."""
     from pursuit_bench.study import rule_report
 
+    kinds, pairs, differs = rule_report.KINDS, rule_report.PAIRS, rule_report.statistics.EQUIVALENCE_MARGIN
+    if stem != "rule-study":
+        try:
+            about = json.loads((where / f"{stem}.json").read_text())
+            kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
+            differs = float(about.get("differs", differs))
+        except (ValueError, KeyError, TypeError) as error:
+            raise BadInput(f"{where / (stem + '.json')}: expected kinds and comparisons ({error})") from None
     try:
-        summary = rule_report.write_report(where, out)
+        summary = rule_report.write_report(where, out, stem, kinds, pairs, differs)
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")
-    click.echo(f"written in {out}: rule-study-report.json, rule-study.md, rule-study.png")
+    click.echo(f"written in {out}: {stem}-report.json, {stem}.md, {stem}.png")
 
 
 def _report_run(folder: Path, out: Path) -> None:

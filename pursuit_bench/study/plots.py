@@ -611,7 +611,7 @@ def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     columns = 5
     rows = -(-len(conditions) // columns)
     fig, axes = plt.subplots(rows, columns, figsize=(3.0 * columns, 2.6 * rows + 1.0), squeeze=False)
-    colors = {"hierarchical": VARIANT_COLORS["hierarchical"], "flat": VARIANT_COLORS["flat"]}
+    colors = {"hierarchical": VARIANT_COLORS["hierarchical"], "flat": VARIANT_COLORS["flat"], "residual": "#dd8452"}
     for i, ax in enumerate(axes.flat):
         if i >= len(conditions):
             ax.set_visible(False)
@@ -637,7 +637,7 @@ def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     fig.suptitle(
         ("Margin over the better fixed mode" if measure == "pool margin" else measure.capitalize())
         + " against one pool of opponents, by training episodes: mean over the condition's predators\n"
-        f"mean over runs ({seeds['hierarchical']} hierarchical, {seeds['flat']} flat), band: 95 % t-interval; "
+        f"mean over runs ({', '.join(f'{n} {k}' for k, n in seeds.items())}), band: 95 % t-interval; "
         f"tick marks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)}), labelled where they fit",
         fontsize=10,
     )

@@ -24,6 +24,7 @@ the same seed, at the end of training.
 
 from __future__ import annotations
 
+import itertools
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -37,9 +38,22 @@ from pursuit_bench.study.report import p_text, span_text
 
 FORMAT = "pursuit-bench-pool-1"
 KINDS = ("hierarchical", "flat")
+#: The learned predator kinds a pool study compares, in the order of their comparisons: each kind
+#: minus every later one (residual − hierarchical, residual − flat, hierarchical − flat).
+ORDER = ("residual", "hierarchical", "flat")
 FLEEING = "FleeingPrey"
 EQUIVALENCE_MARGIN = statistics.EQUIVALENCE_MARGIN
 VERDICTS = ("rule helps", "flat better", "equivalent", "not resolved")
+
+
+def kinds_of(runs: list[dict[str, Any]]) -> list[str]:
+    """The kinds among ``runs`` (each with a ``kind``), in :data:`ORDER`."""
+    return [k for k in ORDER if any(r["kind"] == k for r in runs)]
+
+
+def pairs_of(kinds: list[str]) -> list[tuple[str, str]]:
+    """Every comparison of ``kinds`` (in :data:`ORDER`): each kind minus every later one."""
+    return list(itertools.combinations(kinds, 2))
 
 
 def checkpoint_name(episodes: int, final: int) -> str:
@@ -51,21 +65,25 @@ def checkpoint_name(episodes: int, final: int) -> str:
 
 def plan(sources: list[dict[str, Any]], pool_seeds: tuple[int, ...]) -> dict[str, Any]:
     """Split a sweep's runs (``name``, ``condition``, ``kind``, ``seed``, ``folder``) into the judged
-    runs and each condition's pool (FleeingPrey, then the pool seeds' runs of both kinds);
-    ValueError where a condition lacks a pool run of either kind or two judged runs of either."""
+    runs and each condition's pool (FleeingPrey, then the pool seeds' runs of every kind);
+    ValueError where the runs hold fewer than two kinds, or a condition lacks a pool run of a kind
+    or two judged runs of one."""
     seen: set[tuple[str, str, int]] = set()
     for s in sources:  # a run twice (one sweep given twice, say) would count twice in every interval
         key = (s["condition"], s["kind"], s["seed"])
         if key in seen:
             raise ValueError(f"{s['name']}: {s['kind']} seed {s['seed']} of {s['condition']} given twice")
         seen.add(key)
+    kinds = kinds_of(sources)
+    if len(kinds) < 2:
+        raise ValueError(f"runs of {', '.join(kinds) or 'no'} kind: a pool study compares two kinds or more")
     judged: list[dict[str, Any]] = []
     pools: dict[str, list[dict[str, Any]]] = {}
     for condition in [c for c in CONDITIONS if any(s["condition"] == c for s in sources)]:
         mine = sorted((s for s in sources if s["condition"] == condition), key=lambda s: (s["kind"], s["seed"]))
         pool = [s for s in mine if s["seed"] in pool_seeds]
         rest = [s for s in mine if s["seed"] not in pool_seeds]
-        for kind in KINDS:
+        for kind in kinds:
             if not any(s["kind"] == kind for s in pool):
                 raise ValueError(f"{condition}: no {kind} run of the pool seeds {list(pool_seeds)}")
             if sum(s["kind"] == kind for s in rest) < 2:
@@ -89,10 +107,16 @@ def _jobs(
             for r in layout["judged"]
             if (r["condition"], r["seed"]) == (run["condition"], run["seed"]) and r["kind"] != run["kind"]
         ]
-        crossed = [("own", run["folder"])] + [("other kind", t["folder"]) for t in twin]
+        crossed = [("own", run["folder"])] + [(other_key(t["kind"], len(twin)), t["folder"]) for t in twin]
         final = checkpoint_name(budgets[-1], budgets[-1])
         jobs.append((f"{run['name']}|cross", (run["folder"], final, crossed, cross_episodes, seed)))
     return jobs
+
+
+def other_key(kind: str, others: int) -> str:
+    """Cross-kind play's key of the prey of another kind's run: "other kind" where there is one
+    other kind, else "other kind: <kind>"."""
+    return "other kind" if others == 1 else f"other kind: {kind}"
 
 
 def play(
@@ -220,33 +244,87 @@ def _values(result: dict[str, Any], condition: str, predator: str, kind: str, me
     return np.array([measure(r) for r in runs])
 
 
-def verdict(difference: dict[str, Any], equivalent: dict[str, Any], alpha: float = statistics.ALPHA) -> str:
-    """A panel's verdict from hierarchical minus flat (:func:`statistics.welch_difference` with a
-    Holm-adjusted two-sided ``p_holm``) and its equivalence test (:func:`statistics.equivalence`
-    with ``p_holm``): a significant difference first (two-sided at ``2 alpha``, ``alpha`` a
-    direction), then equivalence within the margin, else not resolved."""
-    return statistics.difference_verdict(
-        difference["mean"], difference["p_holm"], equivalent["p_holm"], ("flat better", "rule helps"), alpha
+def words(pair: tuple[str, str]) -> tuple[str, str]:
+    """The verdicts of ``pair[0] − pair[1]`` below and above zero: "flat better" and "rule helps"
+    for hierarchical − flat, else "<first> worse than <second>" and "<first> better than <second>"."""
+    if tuple(pair) == KINDS:
+        return ("flat better", "rule helps")
+    return (f"{pair[0]} worse than {pair[1]}", f"{pair[0]} better than {pair[1]}")
+
+
+def verdicts_of(pairs: list[tuple[str, str]]) -> tuple[str, ...]:
+    """What a family of the comparisons ``pairs`` counts, in order: :data:`VERDICTS` for
+    hierarchical − flat alone; with several comparisons, each one's better, worse, "<first> −
+    <second>: equivalent" and ": not resolved" (:func:`counted`)."""
+    if list(pairs) == [KINDS]:
+        return VERDICTS
+    return tuple(
+        v for a, b in pairs for v in (*reversed(words((a, b))), f"{a} − {b}: equivalent", f"{a} − {b}: not resolved")
     )
+
+
+def counted(row: dict[str, Any], several: bool) -> str:
+    """What a row's verdict counts as in its family (:func:`verdicts_of`): the verdict itself, or
+    with ``several`` comparisons "equivalent" and "not resolved" named by the comparison."""
+    if several and row["verdict"] in ("equivalent", "not resolved"):
+        first, second = pair_of(row)
+        return f"{first} − {second}: {row['verdict']}"
+    return str(row["verdict"])
+
+
+def pair_of(row: dict[str, Any]) -> tuple[str, str]:
+    """The comparison a row holds: its ``pair`` (first − second), hierarchical − flat without one."""
+    return (row["pair"][0], row["pair"][1]) if "pair" in row else KINDS
+
+
+def verdict(
+    difference: dict[str, Any],
+    equivalent: dict[str, Any],
+    alpha: float = statistics.ALPHA,
+    pair: tuple[str, str] = KINDS,
+) -> str:
+    """A panel's verdict from ``pair[0]`` minus ``pair[1]`` (:func:`statistics.welch_difference`
+    with a Holm-adjusted two-sided ``p_holm``) and its equivalence test (:func:`statistics.equivalence`
+    with ``p_holm``): a significant difference first (two-sided at ``2 alpha``, ``alpha`` a
+    direction; :func:`words`), then equivalence within the margin, else not resolved."""
+    return statistics.difference_verdict(
+        difference["mean"], difference["p_holm"], equivalent["p_holm"], words(pair), alpha
+    )
+
+
+def pairwise(rows: list[dict[str, Any]], pairs: list[tuple[str, str]]) -> list[dict[str, Any]]:
+    """Rows of per-kind values (``condition``, ``predator``, one list a kind) as rows of
+    comparisons: one per row and pair, with its ``pair`` and the two kinds' values. Hierarchical −
+    flat alone stays as the rows were (the layout of every report before the residual kind)."""
+    if [tuple(p) for p in pairs] == [KINDS]:
+        return rows
+    return [
+        {"condition": r["condition"], "predator": r["predator"], "pair": list(p), p[0]: r[p[0]], p[1]: r[p[1]]}
+        for r in rows
+        for p in pairs
+    ]
 
 
 def compare(
     rows: list[dict[str, Any]], margin: float = EQUIVALENCE_MARGIN, alpha: float = statistics.ALPHA
 ) -> dict[str, int]:
-    """Fill each row (``hierarchical`` and ``flat``: per-run values) with hierarchical minus flat
-    (Welch), the equivalence test, both Holm-adjusted over the rows (one family), and the verdict;
-    returns the verdict counts."""
+    """Fill each row (a comparison: :func:`pair_of`, and each of its two kinds' per-run values)
+    with the first kind minus the second (Welch), the equivalence test, both Holm-adjusted over the
+    rows (one family), and the verdict; returns the verdict counts (:func:`verdicts_of`)."""
     for row in rows:
-        h, f = np.asarray(row["hierarchical"]), np.asarray(row["flat"])
-        row["means"] = {"hierarchical": float(h.mean()), "flat": float(f.mean())}
-        row["difference"] = statistics.welch_difference(h, f)
-        row["equivalence"] = statistics.equivalence(h, f, margin, alpha)
+        first, second = pair_of(row)
+        a, b = np.asarray(row[first]), np.asarray(row[second])
+        row["means"] = {first: float(a.mean()), second: float(b.mean())}
+        row["difference"] = statistics.welch_difference(a, b)
+        row["equivalence"] = statistics.equivalence(a, b, margin, alpha)
     for key in ("difference", "equivalence"):
         for row, adjusted in zip(rows, statistics.holm([r[key]["p"] for r in rows]), strict=True):
             row[key]["p_holm"] = float(adjusted)
     for row in rows:
-        row["verdict"] = verdict(row["difference"], row["equivalence"], alpha)
-    return {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
+        row["verdict"] = verdict(row["difference"], row["equivalence"], alpha, pair_of(row))
+    pairs = list(dict.fromkeys(pair_of(r) for r in rows)) or [KINDS]
+    several = pairs != [KINDS]
+    return {v: sum(counted(r, several) == v for r in rows) for v in verdicts_of(pairs)}
 
 
 def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dict[str, Any]:
@@ -256,6 +334,8 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
     cross-kind play per condition."""
     budgets = [str(b) for b in result["budgets"]]
     panels = _panels(result)
+    kinds = kinds_of(result["runs"])
+    pairs = pairs_of(kinds)
 
     def at(budget: str, predator: str, key: str) -> Callable[[Any], float]:
         return lambda r: pooled(r["pool"][budget], predator)[key]
@@ -268,20 +348,27 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
                 {
                     "condition": c,
                     "predator": p,
-                    **{k: _values(result, c, p, k, at(budget, p, key)).tolist() for k in KINDS},
+                    **{k: _values(result, c, p, k, at(budget, p, key)).tolist() for k in kinds},
                 }
                 for c, p in panels
             ]
+            rows = pairwise(rows, pairs)
             entry[key] = {"counts": compare(rows, margin), "panels": rows}
         by_budget.append(entry)
     last = by_budget[-1]
-    improvement = {
-        key: statistics.improvement_interval(
-            [np.array(r["hierarchical"]) for r in last[key]["panels"]],
-            [np.array(r["flat"]) for r in last[key]["panels"]],
-        )
-        for key in ("margin", "return")
-    }
+    improvement: dict[str, Any] = {}
+    for key in ("margin", "return"):
+        by_pair = [
+            {
+                "pair": list(pair),
+                **statistics.improvement_interval(
+                    [np.array(r[pair[0]]) for r in last[key]["panels"] if pair_of(r) == pair],
+                    [np.array(r[pair[1]]) for r in last[key]["panels"] if pair_of(r) == pair],
+                ),
+            }
+            for pair in pairs
+        ]
+        improvement[key] = {k: v for k, v in by_pair[0].items() if k != "pair"} if pairs == [KINDS] else by_pair
 
     span = np.log([int(b) for b in budgets])  # a log axis: the early budgets weigh as the late ones
 
@@ -293,9 +380,10 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
         return measure
 
     speed = [
-        {"condition": c, "predator": p, **{k: _values(result, c, p, k, area(p)).tolist() for k in KINDS}}
+        {"condition": c, "predator": p, **{k: _values(result, c, p, k, area(p)).tolist() for k in kinds}}
         for c, p in panels
     ]
+    speed = pairwise(speed, pairs)
     speed_counts = compare(speed, margin)
     return {
         "episodes": result["episodes"],
@@ -304,7 +392,7 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
         "seed": result["seed"],
         "equivalence_margin": margin,
         "pools": result["pools"],
-        "seeds": {kind: sorted({r["seed"] for r in result["runs"] if r["kind"] == kind}) for kind in KINDS},
+        "seeds": {kind: sorted({r["seed"] for r in result["runs"] if r["kind"] == kind}) for kind in kinds},
         "budgets": by_budget,
         "improvement": improvement,
         "learning_speed": {"counts": speed_counts, "panels": speed},
@@ -321,7 +409,7 @@ def episode_noise(result: dict[str, Any]) -> dict[str, Any]:
     final = str(result["budgets"][-1])
     errors, spreads = [], []
     for condition, predator in _panels(result):
-        for kind in KINDS:
+        for kind in kinds_of(result["runs"]):
             runs = [r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)]
             returns = np.array([pooled(r["pool"][final], predator)["return"] for r in runs])
             per_run = [
@@ -343,36 +431,45 @@ def _condition_margin(evaluation: dict[str, Any]) -> float:
 
 
 def cross_kind(result: dict[str, Any]) -> list[dict[str, Any]]:
-    """Per condition and kind: the margin (mean over predators) against the run's own prey, against
-    the prey of the other kind's run of the same seed, and against the pool, over runs; the
-    change from own prey to the other kind's, paired by run."""
+    """Per condition, kind and other kind: the margin (mean over predators) against the run's own
+    prey, against the prey of the other kind's run of the same seed, and against the pool, over
+    runs; the change from own prey to the other kind's, paired by run."""
     rows: list[dict[str, Any]] = []
     final = str(result["budgets"][-1])
-    for condition in [c for c in CONDITIONS if any(r["condition"] == c for r in result["runs"])]:
-        for kind in KINDS:
-            runs = sorted(
-                (r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)), key=lambda r: r["seed"]
-            )
-            runs = [r for r in runs if "other kind" in r["cross"]]
-            if len(runs) < 2:
-                continue
-            own = np.array([_condition_margin(r["cross"]["own"]) for r in runs])
-            other = np.array([_condition_margin(r["cross"]["other kind"]) for r in runs])
-            pool = np.array(
-                [np.mean([pooled(r["pool"][final], p)["margin"] for p in r["cross"]["own"]["panels"]]) for r in runs]
-            )
-            change = statistics.paired_difference(other, own)
-            rows.append(
-                {
-                    "condition": condition,
-                    "kind": kind,
-                    "runs": len(runs),
-                    "own_prey": {"mean": float(own.mean()), "ci": statistics.t_interval(own)},
-                    "other_kind_prey": {"mean": float(other.mean()), "ci": statistics.t_interval(other)},
-                    "pool": {"mean": float(pool.mean()), "ci": statistics.t_interval(pool)},
-                    "change": {k: change[k] for k in ("mean", "ci", "p_greater", "p_less")},
-                }
-            )
+    kinds = kinds_of(result["runs"])
+    for condition, kind, other_kind in [
+        (c, k, o)
+        for c in CONDITIONS
+        if any(r["condition"] == c for r in result["runs"])
+        for k in kinds
+        for o in kinds
+        if o != k
+    ]:
+        key = other_key(other_kind, len(kinds) - 1)
+        runs = sorted(
+            (r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)), key=lambda r: r["seed"]
+        )
+        runs = [r for r in runs if key in r["cross"]]
+        if len(runs) < 2:
+            continue
+        own = np.array([_condition_margin(r["cross"]["own"]) for r in runs])
+        other = np.array([_condition_margin(r["cross"][key]) for r in runs])
+        pool = np.array(
+            [np.mean([pooled(r["pool"][final], p)["margin"] for p in r["cross"]["own"]["panels"]]) for r in runs]
+        )
+        change = statistics.paired_difference(other, own)
+        rows.append(
+            {
+                "condition": condition,
+                "kind": kind,
+                **({} if len(kinds) == 2 else {"other_kind": other_kind}),
+                "runs": len(runs),
+                "own_prey": {"mean": float(own.mean()), "ci": statistics.t_interval(own)},
+                "other_kind_prey": {"mean": float(other.mean()), "ci": statistics.t_interval(other)},
+                "pool": {"mean": float(pool.mean()), "ci": statistics.t_interval(pool)},
+                "change": {k: change[k] for k in ("mean", "ci", "p_greater", "p_less")},
+            }
+        )
     two_sided = [min(1.0, 2 * min(r["change"]["p_greater"], r["change"]["p_less"])) for r in rows]
     for row, adjusted in zip(rows, statistics.holm(two_sided) if rows else [], strict=True):
         row["change"]["p_holm"] = float(adjusted)  # the table is one family
@@ -385,7 +482,7 @@ def curves(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
     out: dict[str, dict[str, Any]] = {}
     budgets = [str(b) for b in result["budgets"]]
     for condition in [c for c in CONDITIONS if any(r["condition"] == c for r in result["runs"])]:
-        for kind in KINDS:
+        for kind in kinds_of(result["runs"]):
             runs = [r for r in result["runs"] if (r["condition"], r["kind"]) == (condition, kind)]
             matrix = np.array(
                 [
@@ -408,18 +505,28 @@ def curves(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
 
 
 def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
-    """One budget's panels: each kind's mean ``what`` over runs, hierarchical minus flat with its
-    95 % Welch interval and Holm p, the equivalence test's Holm p and the bound it reaches, and
-    the verdict."""
-    lines = [
-        f"| condition | predator | {what}: hierarchical | flat | hierarchical − flat [95 % Welch] | p (Holm) "
-        "| equivalence p (Holm) | within ± (unadjusted) | verdict |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---|",
-    ]
+    """One budget's comparisons: each kind's mean ``what`` over runs, the first minus the second
+    with its 95 % Welch interval and Holm p, the equivalence test's Holm p and the bound it
+    reaches, and the verdict (hierarchical − flat alone: one column a kind, as before the residual
+    kind; otherwise a row per comparison)."""
+    if any("pair" in r for r in rows):
+        lines = [
+            f"| condition | predator | comparison | {what}: first | second | first − second [95 % Welch] | p (Holm) "
+            "| equivalence p (Holm) | within ± (unadjusted) | verdict |",
+            "|---|---|---|---:|---:|---:|---:|---:|---:|---|",
+        ]
+    else:
+        lines = [
+            f"| condition | predator | {what}: hierarchical | flat | hierarchical − flat [95 % Welch] | p (Holm) "
+            "| equivalence p (Holm) | within ± (unadjusted) | verdict |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---|",
+        ]
     for r in rows:
         d, e = r["difference"], r["equivalence"]
+        first, second = pair_of(r)
+        named = f" {first} − {second} |" if "pair" in r else ""
         lines.append(
-            f"| {r['condition']} | {r['predator']} | {r['means']['hierarchical']:+.3f} | {r['means']['flat']:+.3f} "
+            f"| {r['condition']} | {r['predator']} |{named} {r['means'][first]:+.3f} | {r['means'][second]:+.3f} "
             f"| {d['mean']:+.3f}{span_text(d['ci'])} | {p_text(d['p_holm'])} | {p_text(e['p_holm'])} "
             f"| {e['bound']:.3f} | **{r['verdict']}** |"
         )
@@ -429,28 +536,39 @@ def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
 def counts_markdown(summary: dict[str, Any]) -> str:
     """The verdict counts at every budget, on the pool margin and on the pool return, and for
     learning speed."""
+    verdicts = list(summary["budgets"][-1]["return"]["counts"])
     lines = [
-        "| budget (episodes) | measure | " + " | ".join(VERDICTS) + " |",
-        "|---:|---|" + "---:|" * len(VERDICTS),
+        "| budget (episodes) | measure | " + " | ".join(verdicts) + " |",
+        "|---:|---|" + "---:|" * len(verdicts),
     ]
     for entry in summary["budgets"]:
         for key in ("margin", "return"):
             counts = entry[key]["counts"]
-            lines.append(f"| {entry['episodes']} | pool {key} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
+            lines.append(f"| {entry['episodes']} | pool {key} | " + " | ".join(str(counts[v]) for v in verdicts) + " |")
     counts = summary["learning_speed"]["counts"]
-    counted = " | ".join(str(counts[v]) for v in VERDICTS)
+    counted = " | ".join(str(counts[v]) for v in verdicts)
     lines.append(f"| all budgets | head start (margin averaged over the budgets) | {counted} |")
     return "\n".join(lines) + "\n"
 
 
 def improvement_markdown(summary: dict[str, Any]) -> str:
-    """The probability of improvement of the hierarchical predator over the flat one."""
-    lines = ["| compared on | P(hierarchical > flat) [95 % stratified bootstrap] | panels |", "|---|---:|---:|"]
+    """The probability of improvement of each kind over each other (the hierarchical predator over
+    the flat one where those are the kinds)."""
     budget = summary["budgets"][-1]["episodes"]
-    for key, poi in summary["improvement"].items():
-        low, high = poi["ci"]
-        interval = f"{poi['value']:.2f} [{low:.2f}, {high:.2f}]"
-        lines.append(f"| pool {key}, {budget} episodes | {interval} | {poi['panels']} |")
+    if all(isinstance(v, dict) for v in summary["improvement"].values()):
+        lines = ["| compared on | P(hierarchical > flat) [95 % stratified bootstrap] | panels |", "|---|---:|---:|"]
+        for key, poi in summary["improvement"].items():
+            low, high = poi["ci"]
+            interval = f"{poi['value']:.2f} [{low:.2f}, {high:.2f}]"
+            lines.append(f"| pool {key}, {budget} episodes | {interval} | {poi['panels']} |")
+        return "\n".join(lines) + "\n"
+    lines = ["| compared on | P(first > second) [95 % stratified bootstrap] | panels |", "|---|---:|---:|"]
+    for key, by_pair in summary["improvement"].items():
+        for poi in by_pair:
+            low, high = poi["ci"]
+            interval = f"{poi['value']:.2f} [{low:.2f}, {high:.2f}]"
+            first, second = poi["pair"]
+            lines.append(f"| pool {key}, {budget} episodes, {first} > {second} | {interval} | {poi['panels']} |")
     return "\n".join(lines) + "\n"
 
 
@@ -462,8 +580,9 @@ def cross_markdown(rows: list[dict[str, Any]]) -> str:
         "|---|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
+        kind = r["kind"] + (f" (prey of {r['other_kind']})" if "other_kind" in r else "")
         lines.append(
-            f"| {r['condition']} | {r['kind']} | {r['runs']} | {r['own_prey']['mean']:+.3f} "
+            f"| {r['condition']} | {kind} | {r['runs']} | {r['own_prey']['mean']:+.3f} "
             f"| {r['other_kind_prey']['mean']:+.3f} | {r['change']['mean']:+.3f}{span_text(r['change']['ci'])} "
             f"| {p_text(r['change']['p_holm'])} | {r['pool']['mean']:+.3f} |"
         )

@@ -1,6 +1,12 @@
 """The rule study's report (REPRODUCTION.md, "Protocol of the rule study"): from the judged runs'
 compact results (``results/rule-study/runs/``), the primary verdicts and every secondary measure,
 as the protocol fixed them. ``pursuit-bench report results/rule-study`` writes them.
+
+The same report serves a study of any number of kinds in the same per-run format (the residual
+study, docs/residual.md): its comparisons (``pairs``, first − second) are one Holm family per
+budget over every (panel, comparison); a run's panel is its ``setting`` where it has one (a
+condition with obstacles), else its condition. Where the runs carry robustness ladders and the
+residual kind's corrections, the report adds them (:func:`ladders`, :func:`corrections`).
 """
 
 from __future__ import annotations
@@ -17,16 +23,25 @@ from pursuit_bench.study import pool, rule_study, statistics
 from pursuit_bench.study.report import p_text, span_text
 
 KINDS = rule_study.KINDS
+#: The rule study's one comparison.
+PAIRS: list[tuple[str, str]] = [KINDS]
+
+
+def setting_of(run: dict[str, Any]) -> str:
+    """The panel's first half: the run's setting (its condition, with obstacles where it has them)."""
+    return str(run.get("setting", run["condition"]))
 
 
 def panels(runs: list[dict[str, Any]]) -> list[tuple[str, str]]:
-    """Every (condition, predator) the runs hold, in the paper's order."""
+    """Every (setting, predator) the runs hold, in the paper's order of conditions (without
+    obstacles first)."""
+    order = {setting_of(r): (list(CONDITIONS).index(r["condition"]), r.get("obstacles", 0)) for r in runs}
     seen = {
-        (r["condition"], p): None
+        (setting_of(r), p): None
         for r in runs
         for p in r["pool"][rule_study.last_budget(r)][rule_study.FLEEING]["panels"]
     }
-    return sorted(seen, key=lambda k: (list(CONDITIONS).index(k[0]), k[1]))
+    return sorted(seen, key=lambda k: (order[k[0]], k[1]))
 
 
 def budgets(runs: list[dict[str, Any]]) -> list[str]:
@@ -35,16 +50,23 @@ def budgets(runs: list[dict[str, Any]]) -> list[str]:
     return sorted(common, key=int)
 
 
-def _runs_of(runs: list[dict[str, Any]], condition: str, kind: str) -> list[dict[str, Any]]:
-    return sorted((r for r in runs if (r["condition"], r["kind"]) == (condition, kind)), key=lambda r: r["seed"])
+def _runs_of(runs: list[dict[str, Any]], setting: str, kind: str) -> list[dict[str, Any]]:
+    return sorted((r for r in runs if (setting_of(r), r["kind"]) == (setting, kind)), key=lambda r: r["seed"])
 
 
-def rows_of(runs: list[dict[str, Any]], measure: Callable[[dict[str, Any], str], float]) -> list[dict[str, Any]]:
-    """One row per panel: each kind's per-run values of ``measure(run, predator)``, by seed."""
-    return [
-        {"condition": c, "predator": p, **{k: [measure(r, p) for r in _runs_of(runs, c, k)] for k in KINDS}}
+def rows_of(
+    runs: list[dict[str, Any]],
+    measure: Callable[[dict[str, Any], str], float],
+    kinds: tuple[str, ...] = KINDS,
+    pairs: list[tuple[str, str]] = PAIRS,
+) -> list[dict[str, Any]]:
+    """One row per panel and comparison (:func:`pool.pairwise`; one per panel for the rule
+    study): each kind's per-run values of ``measure(run, predator)``, by seed."""
+    rows = [
+        {"condition": c, "predator": p, **{k: [measure(r, p) for r in _runs_of(runs, c, k)] for k in kinds}}
         for c, p in panels(runs)
     ]
+    return pool.pairwise(rows, pairs)
 
 
 def head_start(run: dict[str, Any], predator: str, keys: list[str]) -> float:
@@ -54,13 +76,19 @@ def head_start(run: dict[str, Any], predator: str, keys: list[str]) -> float:
     return float(np.sum((y[1:] + y[:-1]) / 2 * np.diff(x)) / (x[-1] - x[0]))
 
 
-def reliability(runs: list[dict[str, Any]], margin: float = rule_study.FAILURE_MARGIN) -> list[dict[str, Any]]:
+def reliability(
+    runs: list[dict[str, Any]],
+    margin: float = rule_study.FAILURE_MARGIN,
+    kinds: tuple[str, ...] = KINDS,
+    pairs: list[tuple[str, str]] = PAIRS,
+) -> list[dict[str, Any]]:
     """Per panel and kind: failed runs (pool margin at the last budget below ``margin``), their share
-    with Wilson's interval; the difference of the shares, Boschloo's test, Holm over the panels."""
+    with Wilson's interval; the difference of the shares for each comparison, Boschloo's test, Holm
+    over the panels and comparisons (``difference`` for the rule study's one, else ``differences``)."""
     rows = []
     for condition, predator in panels(runs):
         row: dict[str, Any] = {"condition": condition, "predator": predator}
-        for kind in KINDS:
+        for kind in kinds:
             mine = _runs_of(runs, condition, kind)
             count = sum(rule_study.failed(r, predator, margin) for r in mine)
             row[kind] = {
@@ -69,29 +97,49 @@ def reliability(runs: list[dict[str, Any]], margin: float = rule_study.FAILURE_M
                 "share": count / len(mine),
                 "ci": statistics.wilson_interval(count, len(mine)),
             }
-        h, f = row["hierarchical"], row["flat"]
-        row["difference"] = statistics.share_difference(h["failed"], h["runs"], f["failed"], f["runs"])
+        row["differences"] = [
+            {"pair": list(pair), **statistics.share_difference(*_counts(row[pair[0]]), *_counts(row[pair[1]]))}
+            for pair in pairs
+        ]
         rows.append(row)
-    for row, adjusted in zip(rows, statistics.holm([r["difference"]["p"] for r in rows]), strict=True):
-        row["difference"]["p_holm"] = float(adjusted)
+    tests = [d for r in rows for d in r["differences"]]
+    for test, adjusted in zip(tests, statistics.holm([d["p"] for d in tests]), strict=True):
+        test["p_holm"] = float(adjusted)
+    if pairs == PAIRS:  # the rule study's layout
+        for row in rows:
+            row["difference"] = {k: v for k, v in row.pop("differences")[0].items() if k != "pair"}
     return rows
 
 
+def _counts(share: dict[str, Any]) -> tuple[int, int]:
+    return share["failed"], share["runs"]
+
+
 def improvement(rows: list[dict[str, Any]], seed: int = 0, resamples: int = statistics.RESAMPLES) -> dict[str, Any]:
-    """P(hierarchical run > flat run) per panel and averaged over panels, with 95 % percentile
-    intervals from resampling runs within a condition, jointly for its panels (a run's values in
-    the condition's panels stay together)."""
+    """P(first kind's run > second kind's run) per panel and averaged over panels, with 95 %
+    percentile intervals from resampling runs within a condition, jointly for its panels (a run's
+    values in the condition's panels stay together); for rows of several comparisons, one such
+    result per comparison (``pairs``)."""
+    pairs = list(dict.fromkeys(pool.pair_of(r) for r in rows))
+    if len(pairs) > 1:
+        return {
+            "pairs": [
+                {"pair": list(p), **improvement([r for r in rows if pool.pair_of(r) == p], seed, resamples)}
+                for p in pairs
+            ]
+        }
     rng = np.random.default_rng(seed)
     per_panel = np.zeros((resamples, len(rows)))
+    first, second = pairs[0] if pairs else KINDS
     for condition in dict.fromkeys(r["condition"] for r in rows):
         index = [i for i, r in enumerate(rows) if r["condition"] == condition]
-        h = np.array([rows[i]["hierarchical"] for i in index]).T  # (runs, panels)
-        f = np.array([rows[i]["flat"] for i in index]).T
+        h = np.array([rows[i][first] for i in index]).T  # (runs, panels)
+        f = np.array([rows[i][second] for i in index]).T
         rh = h[rng.integers(0, len(h), (resamples, len(h)))]  # (resamples, runs, panels)
         rf = f[rng.integers(0, len(f), (resamples, len(f)))]
         for j, i in enumerate(index):
             per_panel[:, i] = statistics._pairs_above(rh[:, :, j], rf[:, :, j])
-    values = [statistics.probability_of_improvement([np.array(r["hierarchical"])], [np.array(r["flat"])]) for r in rows]
+    values = [statistics.probability_of_improvement([np.array(r[first])], [np.array(r[second])]) for r in rows]
 
     def interval(draws: np.ndarray) -> list[float]:
         return [float(q) for q in np.quantile(draws, [0.025, 0.975])]
@@ -104,19 +152,35 @@ def improvement(rows: list[dict[str, Any]], seed: int = 0, resamples: int = stat
     }
 
 
-def leave_one_out(runs: list[dict[str, Any]], final: str, margin: float) -> dict[str, Any]:
-    """Per panel, the primary difference with each member of the population left out: its range;
-    and, each left-out member's 22 panels judged as one family, the panels whose verdict changes."""
+def leave_one_out(
+    runs: list[dict[str, Any]],
+    final: str,
+    margin: float,
+    kinds: tuple[str, ...] = KINDS,
+    pairs: list[tuple[str, str]] = PAIRS,
+) -> dict[str, Any]:
+    """Per panel (and comparison), the primary difference with each member of the population left
+    out: its range; and, each left-out member's comparisons judged as one family, those whose
+    verdict changes."""
     members = list(runs[0]["pool"][final])
-    base = rows_of(runs, lambda r, p: rule_study.pooled(r["pool"][final], p)["return"])
+    base = rows_of(runs, lambda r, p: rule_study.pooled(r["pool"][final], p)["return"], kinds, pairs)
     pool.compare(base, margin)
-    out = [{"condition": r["condition"], "predator": r["predator"], "differences": {}, "verdicts": {}} for r in base]
+    out = [
+        {
+            "condition": r["condition"],
+            "predator": r["predator"],
+            **({"pair": r["pair"]} if "pair" in r else {}),
+            "differences": {},
+            "verdicts": {},
+        }
+        for r in base
+    ]
     for member in members:
 
         def without(r: dict[str, Any], p: str, m: str = member) -> float:
             return rule_study.pooled(r["pool"][final], p, leave_out=m)["return"]
 
-        rows = rows_of(runs, without)
+        rows = rows_of(runs, without, kinds, pairs)
         pool.compare(rows, margin)
         for entry, row in zip(out, rows, strict=True):
             entry["differences"][member] = row["difference"]["mean"]
@@ -129,12 +193,12 @@ def leave_one_out(runs: list[dict[str, Any]], final: str, margin: float) -> dict
     return {"members": members, "panels": out}
 
 
-def curves(runs: list[dict[str, Any]], keys: list[str]) -> dict[str, dict[str, Any]]:
-    """Per condition and kind: the pool return (mean over the condition's predators) at each
+def curves(runs: list[dict[str, Any]], keys: list[str], kinds: tuple[str, ...] = KINDS) -> dict[str, dict[str, Any]]:
+    """Per setting and kind: the pool return (mean over the setting's predators) at each
     budget, mean over runs with its t-interval: the pool-return-by-budget figure."""
     out: dict[str, dict[str, Any]] = {}
     for condition in dict.fromkeys(c for c, _ in panels(runs)):
-        for kind in KINDS:
+        for kind in kinds:
             mine = _runs_of(runs, condition, kind)
             predators = list(mine[0]["pool"][keys[-1]][rule_study.FLEEING]["panels"])
             matrix = np.array(
@@ -151,9 +215,17 @@ def curves(runs: list[dict[str, Any]], keys: list[str]) -> dict[str, dict[str, A
     return out
 
 
-def summarise(runs: list[dict[str, Any]], margin: float = statistics.EQUIVALENCE_MARGIN) -> dict[str, Any]:
+def summarise(
+    runs: list[dict[str, Any]],
+    margin: float = statistics.EQUIVALENCE_MARGIN,
+    kinds: tuple[str, ...] = KINDS,
+    pairs: list[tuple[str, str]] = PAIRS,
+    differs: float = statistics.EQUIVALENCE_MARGIN,
+) -> dict[str, Any]:
     """Everything the study's report says, at full precision: the primary verdicts (pool return at
-    the last budget), and each secondary measure labelled as such."""
+    the last budget; each comparison of ``pairs`` of ``kinds``, one Holm family a budget), and
+    each secondary measure labelled as such; the ladders and corrections where the runs have them
+    (``differs``: :func:`corrections`)."""
     if not runs:
         raise ValueError("no judged runs: expected results/rule-study/runs/*.json.gz")
     protocols = {r.get("protocol") for r in runs}
@@ -166,93 +238,242 @@ def summarise(runs: list[dict[str, Any]], margin: float = statistics.EQUIVALENCE
     def at(budget: str, key: str) -> Callable[[dict[str, Any], str], float]:
         return lambda r, p: rule_study.pooled(r["pool"][budget], p)[key]
 
-    primary = rows_of(runs, at(final, "return"))
+    primary = rows_of(runs, at(final, "return"), kinds, pairs)
     counts = pool.compare(primary, margin)
-    secondary_margin = rows_of(runs, at(final, "margin"))
+    secondary_margin = rows_of(runs, at(final, "margin"), kinds, pairs)
     margin_counts = pool.compare(secondary_margin, margin)
-    started = rows_of(runs, lambda r, p: head_start(r, p, keys))
+    started = rows_of(runs, lambda r, p: head_start(r, p, keys), kinds, pairs)
     head_counts = pool.compare(started, margin)
     by_budget = []
     for budget in keys[:-1]:
-        rows = rows_of(runs, at(budget, "return"))
+        rows = rows_of(runs, at(budget, "return"), kinds, pairs)
         by_budget.append({"episodes": int(budget), "counts": pool.compare(rows, margin), "panels": rows})
+    design = {} if (kinds, pairs) == (KINDS, PAIRS) else {"kinds": list(kinds), "comparisons": [list(p) for p in pairs]}
+    extra: dict[str, Any] = {}
+    if any("ladders" in r for r in runs):
+        extra["ladders"] = ladders(runs)
+    if any("corrections" in r for r in runs):
+        extra["corrections"] = corrections(runs, final, differs)
     return {
+        **design,
         "protocol": runs[0].get("protocol"),
         "builds": builds,
         "equivalence_margin": margin,
         "failure_margin": rule_study.FAILURE_MARGIN,
         "budgets": [int(b) for b in keys],
-        "runs": {k: {c: len(_runs_of(runs, c, k)) for c in dict.fromkeys(r["condition"] for r in runs)} for k in KINDS},
+        "runs": {k: {c: len(_runs_of(runs, c, k)) for c in dict.fromkeys(setting_of(r) for r in runs)} for k in kinds},
         "primary": {"measure": f"pool return at {final} episodes", "counts": counts, "panels": primary},
         "secondary": {
             "margin": {"counts": margin_counts, "panels": secondary_margin},
-            "reliability": reliability(runs),
-            "reliability_below_zero": reliability(runs, 0.0),
+            "reliability": reliability(runs, rule_study.FAILURE_MARGIN, kinds, pairs),
+            "reliability_below_zero": reliability(runs, 0.0, kinds, pairs),
             "head_start": {"counts": head_counts, "panels": started},
             "budgets": by_budget,
             "improvement": improvement(primary),
-            "leave_one_out": leave_one_out(runs, final, margin),
+            "leave_one_out": leave_one_out(runs, final, margin, kinds, pairs),
+            **extra,
         },
-        "curves": curves(runs, keys),
+        "curves": curves(runs, keys, kinds),
     }
+
+
+def ladders(runs: list[dict[str, Any]], kinds: tuple[str, str] = ("residual", "hierarchical")) -> dict[str, Any]:
+    """The robustness ladders (secondary): per ladder, setting and rung, each run's change of its
+    margin from the unperturbed level, ``kinds[0]`` − ``kinds[1]`` paired by seed (paired t), one
+    Holm family per ladder over its (setting, rung) cells."""
+    out: dict[str, Any] = {}
+    settings = list(dict.fromkeys(c for c, _ in panels(runs)))
+    levels = list(dict.fromkeys(level for r in runs if "ladders" in r for level in r["ladders"]))
+    for level in [v for v in levels if "=" in v]:
+        ladder, rung = level.split("=", 1)
+        for setting in settings:
+            first, second = (
+                {r["seed"]: r for r in _runs_of(runs, setting, k) if level in r.get("ladders", {})} for k in kinds
+            )
+            seeds = sorted(set(first) & set(second))
+            if len(seeds) < 2:
+                continue
+
+            def change(run: dict[str, Any], level: str = level) -> float:
+                return float(run["ladders"][level]["margin"] - run["ladders"]["none"]["margin"])
+
+            a = np.array([change(first[s]) for s in seeds])
+            b = np.array([change(second[s]) for s in seeds])
+            d = statistics.paired_difference(a, b)
+            p = min(1.0, 2 * min(d["p_greater"], d["p_less"]))
+            cell = {
+                "setting": setting,
+                "rung": float(rung),
+                "seeds": seeds,
+                "change": {kinds[0]: float(a.mean()), kinds[1]: float(b.mean())},
+                "difference": {"mean": d["mean"], "ci": d["ci"], "p": p},
+            }
+            out.setdefault(ladder, {"pair": list(kinds), "cells": []})["cells"].append(cell)
+    for family in out.values():
+        for cell, adjusted in zip(
+            family["cells"], statistics.holm([c["difference"]["p"] for c in family["cells"]]), strict=True
+        ):
+            cell["difference"]["p_holm"] = float(adjusted)
+    return out
+
+
+def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[dict[str, Any]]:
+    """Where and how much each residual run corrects the rule (secondary, descriptive): its pool
+    margin at ``final`` (mean over its predators) beside that of the hierarchical run of its seed,
+    whether they differ by more than ``differs``, and its share of corrected states."""
+    rows = []
+    for setting in dict.fromkeys(c for c, _ in panels(runs)):
+        hierarchical = {r["seed"]: r for r in _runs_of(runs, setting, "hierarchical")}
+        for run in _runs_of(runs, setting, "residual"):
+            if "corrections" not in run:
+                continue
+            predators = list(run["pool"][final][rule_study.FLEEING]["panels"])
+
+            def margin(r: dict[str, Any], predators: list[str] = predators) -> float:
+                return float(np.mean([rule_study.pooled(r["pool"][final], p)["margin"] for p in predators]))
+
+            twin = hierarchical.get(run["seed"])
+            row: dict[str, Any] = {
+                "setting": setting,
+                "seed": run["seed"],
+                "margin": margin(run),
+                "hierarchical_margin": None if twin is None else margin(twin),
+                "corrected": {p: c["corrected"] for p, c in run["corrections"].items()},
+                "by_distance": {p: c["correction_by_distance"] for p, c in run["corrections"].items()},
+            }
+            row["differs"] = None if twin is None else abs(row["margin"] - row["hierarchical_margin"]) > differs
+            rows.append(row)
+    return rows
 
 
 # --- tables -------------------------------------------------------------------------------------
 
 
+def _title(pair: tuple[str, str]) -> str:
+    return f"{pair[0]} − {pair[1]}"
+
+
 def reliability_markdown(rows: list[dict[str, Any]]) -> str:
-    lines = [
-        "| condition | predator | hierarchical failed [95 % Wilson] | flat failed [95 % Wilson] "
-        "| difference | p (Boschloo, Holm) |",
-        "|---|---|---:|---:|---:|---:|",
-    ]
+    if "difference" in rows[0]:  # the rule study's one comparison
+        lines = [
+            "| condition | predator | hierarchical failed [95 % Wilson] | flat failed [95 % Wilson] "
+            "| difference | p (Boschloo, Holm) |",
+            "|---|---|---:|---:|---:|---:|",
+        ]
+        for r in rows:
+            h, f = r["hierarchical"], r["flat"]
+            lines.append(
+                f"| {r['condition']} | {r['predator']} | {h['failed']}/{h['runs']}{span_text(h['ci'])} "
+                f"| {f['failed']}/{f['runs']}{span_text(f['ci'])} | {r['difference']['difference']:+.2f} "
+                f"| {p_text(r['difference']['p_holm'])} |"
+            )
+        return "\n".join(lines) + "\n"
+    kinds = [k for k in rows[0] if k not in ("condition", "predator", "differences")]
+    pairs = [tuple(d["pair"]) for d in rows[0]["differences"]]
+    head = " | ".join(f"{k} failed [95 % Wilson]" for k in kinds)
+    tests = " | ".join(f"{_title(p)} | p (Boschloo, Holm)" for p in pairs)
+    lines = [f"| condition | predator | {head} | {tests} |", "|---|---|" + "---:|" * (len(kinds) + 2 * len(pairs))]
     for r in rows:
-        h, f = r["hierarchical"], r["flat"]
-        lines.append(
-            f"| {r['condition']} | {r['predator']} | {h['failed']}/{h['runs']}{span_text(h['ci'])} "
-            f"| {f['failed']}/{f['runs']}{span_text(f['ci'])} | {r['difference']['difference']:+.2f} "
-            f"| {p_text(r['difference']['p_holm'])} |"
-        )
+        shares = " | ".join(f"{r[k]['failed']}/{r[k]['runs']}{span_text(r[k]['ci'])}" for k in kinds)
+        differences = " | ".join(f"{d['difference']:+.2f} | {p_text(d['p_holm'])}" for d in r["differences"])
+        lines.append(f"| {r['condition']} | {r['predator']} | {shares} | {differences} |")
     return "\n".join(lines) + "\n"
 
 
 def leave_one_out_markdown(entry: dict[str, Any]) -> str:
-    lines = [
-        "| condition | predator | verdict | hierarchical − flat, one member left out: range | verdicts it changes to |"
-    ]
-    lines.append("|---|---|---|---:|---|")
+    several = any("pair" in r for r in entry["panels"])
+    what = "comparison | difference" if several else "hierarchical − flat"
+    lines = [f"| condition | predator | verdict | {what}, one member left out: range | verdicts it changes to |"]
+    lines.append("|---|---|---|" + ("---|" if several else "") + "---:|---|")
     for r in entry["panels"]:
         low, high = r["range"]
+        named = f" {_title(r['pair'])} |" if several else ""
         lines.append(
-            f"| {r['condition']} | {r['predator']} | {r['verdict']} | {low:+.3f} to {high:+.3f} "
+            f"| {r['condition']} | {r['predator']} | {r['verdict']} |{named} {low:+.3f} to {high:+.3f} "
             f"| {', '.join(r['changes']) or '—'} |"
         )
     return "\n".join(lines) + "\n"
 
 
 def improvement_markdown(poi: dict[str, Any], rows: list[dict[str, Any]]) -> str:
-    lines = ["| panel | P(hierarchical run > flat run) [95 %, runs resampled within condition] |", "|---|---:|"]
+    if "pairs" in poi:
+        return "\n".join(
+            improvement_markdown(p, [r for r in rows if list(pool.pair_of(r)) == p["pair"]]) for p in poi["pairs"]
+        )
+    first, second = pool.pair_of(rows[0]) if rows else KINDS
+    lines = [f"| panel | P({first} run > {second} run) [95 %, runs resampled within condition] |", "|---|---:|"]
     lines.append(f"| all panels | {poi['value']:.2f}{span_text(poi['ci'], 2)} |")
     for row, p in zip(rows, poi["panels"], strict=True):
         lines.append(f"| {row['condition']} {row['predator']} | {p['value']:.2f}{span_text(p['ci'], 2)} |")
     return "\n".join(lines) + "\n"
 
 
+def ladders_markdown(families: dict[str, Any]) -> str:
+    lines = []
+    for ladder, family in families.items():
+        a, b = family["pair"]
+        lines += [
+            f"{ladder} (one Holm family of {len(family['cells'])}):",
+            "",
+            f"| setting | rung | seeds | {a}: change of margin | {b}: change of margin "
+            f"| {a} − {b} [95 % t, paired by seed] | p (Holm) |",
+            "|---|---:|---:|---:|---:|---:|---:|",
+        ]
+        for c in family["cells"]:
+            d = c["difference"]
+            lines.append(
+                f"| {c['setting']} | {c['rung']:g} | {len(c['seeds'])} | {c['change'][a]:+.3f} | {c['change'][b]:+.3f} "
+                f"| {d['mean']:+.3f}{span_text(d['ci'])} | {p_text(d['p_holm'])} |"
+            )
+        lines.append("")
+    return "\n".join(lines)
+
+
+def corrections_markdown(rows: list[dict[str, Any]], differs: float) -> str:
+    lines = [
+        f"| setting | seed | residual pool margin | hierarchical's, same seed | differs by more than {differs} "
+        "| states corrected (per predator) |",
+        "|---|---:|---:|---:|---|---|",
+    ]
+    for r in sorted(rows, key=lambda r: (not r["differs"], r["setting"], r["seed"])):
+        twin = "—" if r["hierarchical_margin"] is None else f"{r['hierarchical_margin']:+.3f}"
+        shares = ", ".join(f"{v:.1%}" for v in r["corrected"].values())
+        lines.append(f"| {r['setting']} | {r['seed']} | {r['margin']:+.3f} | {twin} | {r['differs']} | {shares} |")
+    return "\n".join(lines) + "\n"
+
+
 def counts_line(counts: dict[str, int]) -> str:
-    return ", ".join(f"{counts[v]} {v}" for v in pool.VERDICTS)
+    return ", ".join(f"{n} {v}" for v, n in counts.items())
 
 
-def markdown(summary: dict[str, Any]) -> str:
-    """rule-study.md: the primary verdicts first, then each secondary measure, labelled."""
+def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MARGIN) -> str:
+    """The report: the primary verdicts first, then each secondary measure, labelled."""
     final = summary["budgets"][-1]
     s = summary["secondary"]
     budget_lines = [f"- {b['episodes']} episodes: {counts_line(b['counts'])}" for b in s["budgets"]]
+    pairs = [tuple(p) for p in summary.get("comparisons", PAIRS)]
+    compared = ", ".join(_title(p) for p in pairs)
+    tests = len(summary["primary"]["panels"])
+    family = f"{tests} panels" if pairs == PAIRS else f"{tests} tests: every panel and comparison"
+    extra = []
+    if "ladders" in s:
+        extra += [
+            "## Secondary: the robustness ladders (change of margin, paired by seed)",
+            "",
+            ladders_markdown(s["ladders"]),
+        ]
+    if "corrections" in s:
+        extra += [
+            "## Secondary: where the residual predator corrects the rule (descriptive)",
+            "",
+            corrections_markdown(s["corrections"], differs),
+        ]
     return "\n".join(
         [
-            f"## Primary: the pool return at {final} episodes, hierarchical − flat",
+            f"## Primary: the pool return at {final} episodes, {compared}",
             "",
             f"{counts_line(summary['primary']['counts'])} (Welch, Holm over "
-            f"{len(summary['primary']['panels'])} panels, "
+            f"{family}, "
             f"equivalence within ±{summary['equivalence_margin']}). Protocol {summary['protocol']}; builds "
             f"{', '.join(b[:10] for b in summary['builds'])}.",
             "",
@@ -283,24 +504,33 @@ def markdown(summary: dict[str, Any]) -> str:
             "## Secondary: leave one member of the population out",
             "",
             leave_one_out_markdown(s["leave_one_out"]),
+            *extra,
         ]
     )
 
 
-def write_report(where: Path, out: Path) -> dict[str, Any]:
-    """From the study's folder (``runs/*.json.gz``): rule-study-report.json, rule-study.md and
-    rule-study.png in ``out``; returns the summary."""
+def write_report(
+    where: Path,
+    out: Path,
+    stem: str = "rule-study",
+    kinds: tuple[str, ...] = KINDS,
+    pairs: list[tuple[str, str]] = PAIRS,
+    differs: float = statistics.EQUIVALENCE_MARGIN,
+) -> dict[str, Any]:
+    """From the study's folder (``runs/*.json.gz``): ``<stem>-report.json``, ``<stem>.md`` and
+    ``<stem>.png`` in ``out`` (rule-study-…, or a study of ``kinds`` compared by ``pairs``);
+    returns the summary."""
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
     from pursuit_bench.study.plots import pool_png
 
-    summary = summarise(rule_study.read_runs(where / "runs"))
+    summary = summarise(rule_study.read_runs(where / "runs"), kinds=kinds, pairs=pairs, differs=differs)
     out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "rule-study-report.json", json.dumps(summary, indent=2) + "\n")
-    atomic_write_text(out / "rule-study.md", markdown(summary))
+    atomic_write_text(out / f"{stem}-report.json", json.dumps(summary, indent=2) + "\n")
+    atomic_write_text(out / f"{stem}.md", markdown(summary, differs))
     figure = {
         "curves": summary["curves"],
         "seeds": {k: list(range(max(v.values()))) for k, v in summary["runs"].items()},
         "budgets": [{"episodes": b} for b in summary["budgets"]],
     }
-    atomic_write_bytes(out / "rule-study.png", pool_png(figure, measure="pool return"))
+    atomic_write_bytes(out / f"{stem}.png", pool_png(figure, measure="pool return"))
     return summary

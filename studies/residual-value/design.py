@@ -1,0 +1,158 @@
+"""The residual study's fixed design (docs/residual.md, "Protocol of the residual study"): its
+settings, kinds, seeds, population, comparisons, ladders and seed rule. Pure data and small
+functions (no torch): ``run.py`` drives the study by it, ``tests/test_residual_study.py`` checks it.
+
+It must work with the rule study's build (commit ec5779b) as it is, so nothing here is in the
+package: it reads the package's constants where the rule study fixed them, and adds only what the
+residual study adds.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.study import rule_study
+
+#: The rule study's build: the package code every run of this study is trained and evaluated by
+#: (``studies/rule-value/run.py``'s fingerprint of the package's tracked .py files, and its commit).
+RULE_STUDY_CODE = "cc950401500232df"
+RULE_STUDY_COMMIT = "ec5779b6759f318367ef65b14b1a83533ccce805"
+
+KINDS = ("hierarchical", "residual", "flat")
+#: The comparisons, first − second; one Holm family per budget over every (panel, comparison).
+COMPARISONS = (("residual", "hierarchical"), ("residual", "flat"))
+OBSTACLES = 4
+#: Every setting: its condition and obstacles per arena. The plain ones are the rule study's.
+SETTINGS: dict[str, tuple[str, int]] = {
+    "3p-low-individual": ("3p-low-individual", 0),
+    "3p-high-shared": ("3p-high-shared", 0),
+    "2p-high-individual": ("2p-high-individual", 0),
+    "1p-high": ("1p-high", 0),
+    f"2p-high-individual-obstacles{OBSTACLES}": ("2p-high-individual", OBSTACLES),
+    f"1p-high-obstacles{OBSTACLES}": ("1p-high", OBSTACLES),
+}
+POPULATION = "residual-study"
+FLEEING = rule_study.FLEEING
+BUDGETS = rule_study.BUDGETS
+EPISODES, EVAL_SEED = rule_study.EPISODES, rule_study.EVAL_SEED
+POPULATION_RUNS = rule_study.POPULATION_RUNS
+#: Seeds of the judged runs (the rule study's range) and the seed rule's counts (the rule study's).
+JUDGED_SEEDS_END = rule_study.JUDGED_SEEDS_END
+FIRST_RUNS, STEP_RUNS, MOST_RUNS = rule_study.FIRST_RUNS, rule_study.STEP_RUNS, rule_study.MOST_RUNS
+FAILURE_MARGIN = rule_study.FAILURE_MARGIN
+#: The robustness ladders run (``pursuit_bench.study.robustness.LADDERS``' rungs), on the kinds
+#: compared there; the obstacles ladder only where the runs trained without obstacles.
+LADDERS: dict[str, tuple[float, ...]] = {"obs-noise": (0.02, 0.05, 0.1), "delay": (1, 3, 6), "obstacles": (2, 4, 6)}
+LADDER_KINDS = ("residual", "hierarchical")
+LADDER_EPISODES = 300
+#: ``analyze``'s correction by distance and mode: episodes and seed (the CLI's defaults).
+ANALYSIS_EPISODES, ANALYSIS_SEED = 200, 0
+#: A residual run's margin "differs" from the hierarchical one when its pool margin at the last
+#: budget (mean over its predators) is further than this from the hierarchical run of its seed's.
+DIFFERS = 0.05
+
+
+def condition_of(setting: str) -> str:
+    return SETTINGS[setting][0]
+
+
+def obstacles_of(setting: str) -> int:
+    return SETTINGS[setting][1]
+
+
+def plain(setting: str) -> bool:
+    """Whether the rule study has the setting (its hierarchical and flat runs are reused)."""
+    return obstacles_of(setting) == 0
+
+
+def population_name(setting: str) -> str:
+    """The population's name (the package's folder ``populations/<name>/<condition>/``): the plain
+    settings' is ``residual-study``, the obstacle ones' ``residual-study-obstacles4`` (a population
+    folder is named by a condition; the obstacles go into the population's name)."""
+    return POPULATION if plain(setting) else f"{POPULATION}-obstacles{obstacles_of(setting)}"
+
+
+def population_seeds(kind: str) -> range:
+    """The seeds of a kind's population runs: hierarchical 1000–1003 and flat 1004–1007 (the rule
+    study's), residual 1008–1011."""
+    start = rule_study.POPULATION_FIRST_SEED + KINDS_BY_SEED.index(kind) * POPULATION_RUNS
+    return range(start, start + POPULATION_RUNS)
+
+
+#: The kinds in the order of their population seeds (the rule study's two first).
+KINDS_BY_SEED = ("hierarchical", "flat", "residual")
+
+
+def members(setting: str) -> list[dict[str, Any]]:
+    """A setting's population: the rule study's members of its condition (FleeingPrey, 4
+    hierarchical, 4 flat), then the residual kind's 4; the same names and seeds in the obstacle
+    settings, whose members are trained here with the obstacles."""
+    rule = rule_study.members(condition_of(setting))
+    added = [
+        {"name": f"residual-seed{seed}", "kind": "residual", "policy": None, "seed": seed}
+        for seed in population_seeds("residual")
+    ]
+    return [*rule, *added]
+
+
+def trained_here(setting: str, stage: str) -> tuple[str, ...]:
+    """The kinds this study trains in a setting (``stage``: population or judged): the residual
+    kind alone where the rule study has the setting, all three elsewhere."""
+    if stage not in ("population", "judged"):
+        raise ValueError(f"stage={stage!r}: expected population or judged")
+    return ("residual",) if plain(setting) else KINDS_BY_SEED
+
+
+def check_design(judged: dict[str, list[int]], population: list[dict[str, Any]]) -> None:
+    """ValueError unless the population's seeds are distinct, at least 1000 and disjoint from
+    every judged seed (0–999) (``rule_study.check_design``, which reads any kinds)."""
+    rule_study.check_design(judged, population)
+
+
+def seeds_wanted(
+    runs: list[dict[str, Any]], first: int = FIRST_RUNS, step: int = STEP_RUNS, most: int = MOST_RUNS
+) -> int:
+    """The rule study's seed rule over the three kinds of one setting (``runs``: its compact
+    results against its population): ``first``; once seeds 0 … n-1 of every kind are in (n <
+    ``most``), n + ``step`` where some panel has a failed run of any kind among them, else n."""
+    wanted = first
+    while wanted < most:
+        chosen = [r for r in runs if r["seed"] < wanted]
+        if not all(sum(r["kind"] == k for r in chosen) >= wanted for k in KINDS):
+            return wanted
+        predators = chosen[0]["pool"][rule_study.last_budget(chosen[0])][FLEEING]["panels"]
+        if not any(rule_study.failed(r, p) for r in chosen for p in predators):
+            return wanted
+        wanted = min(wanted + step, most)
+    return wanted
+
+
+def plan() -> list[dict[str, Any]]:
+    """What the study runs, setting by setting, in order: the population's members (which are
+    trained here, which come from the rule study), the judged runs (trained here or reused from the
+    rule study), the comparisons, the ladders and the analysis. PLAN.md and the tests read it."""
+    rows = []
+    for setting in SETTINGS:
+        rows.append(
+            {
+                "setting": setting,
+                "condition": condition_of(setting),
+                "obstacles": obstacles_of(setting),
+                "population": population_name(setting),
+                "members": [m["name"] for m in members(setting)],
+                "population_trained_here": list(trained_here(setting, "population")),
+                "judged_trained_here": list(trained_here(setting, "judged")),
+                "judged_reused": [] if not plain(setting) else ["hierarchical", "flat"],
+                "judged_seeds": f"0–{FIRST_RUNS - 1}, by the seed rule up to 0–{MOST_RUNS - 1}",
+                "budgets": list(BUDGETS),
+                "comparisons": [list(c) for c in COMPARISONS],
+                "ladders": {k: list(v) for k, v in LADDERS.items() if k != "obstacles" or plain(setting)},
+                "ladder_kinds": list(LADDER_KINDS),
+                "analysis": "residual runs",
+            }
+        )
+    return rows
+
+
+assert all(c in CONDITIONS for c, _ in SETTINGS.values())

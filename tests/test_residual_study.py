@@ -1,0 +1,264 @@
+"""The residual study's design and driver (issue 48; docs/residual.md, "Protocol of the residual
+study"): the population is disjoint from the judged runs and holds no twins, the plan lists what
+the protocol says, the seed rule reads all three kinds, and a tiny run of the driver reuses a rule
+study's runs (one of them trained again, exactly) and writes every compact result."""
+
+import gzip
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from types import ModuleType
+
+import pytest
+
+from pursuit_bench import pretrained
+from pursuit_bench.study import rule_study
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDY = ROOT / "studies" / "residual-value"
+
+
+def _design() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("residual_design", STUDY / "design.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+design = _design()
+
+
+def test_the_population_is_disjoint_from_the_judged_runs_and_holds_no_twins() -> None:
+    everyone = []
+    for setting in design.SETTINGS:
+        members = design.members(setting)
+        seeds = [m["seed"] for m in members if m["seed"] is not None]
+        assert len(seeds) == 12 and len(set(seeds)) == 12 and min(seeds) >= 1000
+        assert [m["name"] for m in members[:9]] == [m["name"] for m in rule_study.members(design.condition_of(setting))]
+        assert {m["kind"] for m in members} == {"scripted", "hierarchical", "flat", "residual"}
+        design.check_design({k: list(range(design.MOST_RUNS)) for k in design.KINDS}, members)
+        everyone.append(sorted(seeds))
+    assert design.population_seeds("residual") == range(1008, 1012)
+    assert all(s == list(range(1000, 1012)) for s in everyone)
+    with pytest.raises(ValueError, match="outside 0–999"):  # a judged residual run on a member's seed
+        design.check_design({"residual": [0, 1009]}, design.members("1p-high"))
+    twin = [*design.members("1p-high"), {"name": "again", "kind": "residual", "policy": None, "seed": 1004}]
+    with pytest.raises(ValueError, match="repeat"):
+        design.check_design({}, twin)
+
+
+def test_the_plan_lists_what_the_protocol_says() -> None:
+    plan = {row["setting"]: row for row in design.plan()}
+    assert set(plan) == {
+        "1p-high",
+        "2p-high-individual",
+        "3p-low-individual",
+        "3p-high-shared",
+        "1p-high-obstacles4",
+        "2p-high-individual-obstacles4",
+    }
+    for setting, row in plan.items():
+        obstacles = setting.endswith("obstacles4")
+        assert row["obstacles"] == (4 if obstacles else 0)
+        assert row["budgets"] == [1500, 5000, 10500, 12750, 15000]
+        assert row["comparisons"] == [["residual", "hierarchical"], ["residual", "flat"]]
+        assert row["judged_trained_here"] == (["hierarchical", "flat", "residual"] if obstacles else ["residual"])
+        assert row["judged_reused"] == ([] if obstacles else ["hierarchical", "flat"])
+        assert row["population_trained_here"] == row["judged_trained_here"]
+        assert row["population"] == ("residual-study-obstacles4" if obstacles else "residual-study")
+        assert set(row["ladders"]) == ({"obs-noise", "delay"} if obstacles else {"obs-noise", "delay", "obstacles"})
+        assert row["ladder_kinds"] == ["residual", "hierarchical"]
+    protocol = (ROOT / "docs" / "residual.md").read_text()
+    assert "## Protocol of the residual study" in protocol
+    assert f"`{design.RULE_STUDY_CODE}`" in protocol  # the build it runs on, named in the protocol
+
+
+def test_the_build_is_the_rule_study_s() -> None:
+    """The build the driver insists on is the one the rule study records (studies/rule-value/build.json,
+    where the checkout has it)."""
+    recorded = ROOT / "studies" / "rule-value" / "build.json"
+    if not recorded.exists():
+        pytest.skip("no studies/rule-value/build.json in this checkout")
+    build = json.loads(recorded.read_text())
+    assert (build["code"], build["commit"]) == (design.RULE_STUDY_CODE, design.RULE_STUDY_COMMIT)
+
+
+def _run(seed: int, kind: str, margin: float) -> dict:
+    """A compact result whose every member gives ``margin`` (the trained return over the baselines)."""
+    panels = {"predator_0": [margin, 0.0, 0.0]}
+    return {"seed": seed, "kind": kind, "pool": {"8": {"FleeingPrey": {"panels": panels}, "x": {"panels": panels}}}}
+
+
+def test_the_seed_rule_reads_all_three_kinds() -> None:
+    good = [_run(s, k, 0.1) for s in range(10) for k in design.KINDS]
+    assert design.seeds_wanted(good) == 10
+    assert design.seeds_wanted(good[:-1]) == 10  # not all in: still the first ten
+    split = [*good[:-1], _run(9, "flat", -0.2)]  # one failed run of one kind
+    assert design.seeds_wanted(split) == 20
+    more = split + [_run(s, k, 0.1) for s in range(10, 20) for k in design.KINDS]
+    assert design.seeds_wanted(more) == 30  # the failure is still among the first 20
+    assert design.seeds_wanted(more + [_run(s, k, 0.1) for s in range(20, 30) for k in design.KINDS]) == 30
+
+
+def _tiny_rule_study(tmp: Path) -> None:
+    """What the rule study leaves for 1p-high, tiny: its population (one prey in every learned
+    member's place), its judged runs' folders (seeds 0–1 of both kinds) and their compact results."""
+    from pursuit_bench.agents.config import PRESETS
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.sweep import SweepPlan, open_sweep, run_sweep
+
+    plan = SweepPlan(
+        conditions=("1p-high",),
+        seeds=2,
+        predators=("hierarchical", "flat"),
+        agent=PRESETS["quick"].replace(episodes=8),
+        episodes=8,
+        eval_episodes=1,
+        num_envs=2,
+        checkpoint_every=4,
+        preset="quick",
+        keep_checkpoints=(4,),
+    )
+    sweep = tmp / "rule-work" / "judged-1p-high-from0"
+    open_sweep(sweep, plan)
+    assert run_sweep(sweep, plan, workers=1, record=False)
+    config, agents, _ = runs.described(sweep / "runs" / "1p-high-hierarchical-seed0")
+    prey = {m["name"]: (agents["prey_0"], config) for m in rule_study.members("1p-high") if m["policy"] is None}
+    trained = {n: {"preset": "quick", "episodes": 8, "predator_kind": "x", "build": "test"} for n in prey}
+    rule_study.write_population(tmp / "rule-pop", "1p-high", prey, trained)
+    for kind in rule_study.KINDS:
+        for seed in range(2):
+            name = f"1p-high-{kind}-seed{seed}"
+            result = rule_study.evaluate_run(
+                sweep / "runs" / name, tmp / "rule-pop" / "1p-high", episodes=2, budgets=(4, 8)
+            )
+            rule_study.write_run(tmp / "rule-results" / "runs", name, "1p-high", kind, seed, "test", result)
+
+
+@pytest.mark.slow
+def test_a_tiny_run_of_the_driver_reuses_the_rule_study_s_runs(tmp_path: Path) -> None:
+    import shutil
+
+    _tiny_rule_study(tmp_path)
+    shutil.rmtree(
+        tmp_path / "rule-work" / "judged-1p-high-from0" / "runs" / "1p-high-flat-seed1"
+    )  # a new machine's loss
+    options = ["--preset", "quick", "--episodes", "8", "--budgets", "4,8", "--eval-episodes", "2", "--num-envs", "2"]
+    options += ["--checkpoint-every", "4", "--first", "2", "--step", "1", "--most", "2", "--rule-first", "2"]
+    where = {k: str(tmp_path / k) for k in ("work", "results", "population", "rule-work", "rule-results")}
+    command = [sys.executable, str(STUDY / "run.py"), "--workers", "1", "--settings", "1p-high", "--poll", "0"]
+    command += [f"--{k}={v}" for k, v in where.items()] + [f"--rule-population={tmp_path / 'rule-pop'}"]
+    done = subprocess.run(
+        command + options + ["--skip-build-check"], capture_output=True, text=True, timeout=600, env=os.environ.copy()
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    index = json.loads((tmp_path / "population" / "residual-study" / "1p-high" / "population.json").read_text())
+    assert [m["name"] for m in index["members"]] == [m["name"] for m in design.members("1p-high")]
+    copied = tmp_path / "population" / "residual-study" / "1p-high" / "flat-seed1004" / "prey_0.safetensors"
+    assert (
+        copied.read_bytes() == (tmp_path / "rule-pop" / "1p-high" / "flat-seed1004" / "prey_0.safetensors").read_bytes()
+    )
+    from pursuit_bench.pretrained import populations
+
+    loaded = populations.load("residual-study", "1p-high", folder=tmp_path / "population")
+    assert len(loaded.members) == 13
+    results = {p.name: json.loads(gzip.decompress(p.read_bytes())) for p in (tmp_path / "results" / "runs").iterdir()}
+    assert sorted(results) == sorted(f"1p-high-{k}-seed{s}.json.gz" for k in design.KINDS for s in range(2))
+    for name, run in results.items():
+        assert list(run["pool"]) == ["4", "8"] and list(run["pool"]["8"]) == index_names(index)
+        earlier = tmp_path / "rule-results" / "runs" / name
+        if run["kind"] == "residual":
+            assert not earlier.exists() and set(run["evaluated_by"].values()) == {"residual-study"}
+            assert 0.0 <= run["corrections"]["predator_0"]["corrected"] <= 1.0
+        else:  # the rule study's nine evaluations, as it wrote them; the residual members played here
+            rule = json.loads(gzip.decompress(earlier.read_bytes()))
+            for budget in ("4", "8"):
+                assert {k: run["pool"][budget][k] for k in rule["pool"][budget]} == rule["pool"][budget]
+        assert ("ladders" in run) == (run["kind"] != "flat")
+    assert "runs the rule study's folders lack" in (tmp_path / "work" / "progress.log").read_text()
+    again = subprocess.run(command + options + ["--skip-build-check"], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0 and "evaluating" not in again.stdout  # a rerun redoes nothing
+
+
+def index_names(index: dict) -> list[str]:
+    return [m["name"] for m in index["members"]]
+
+
+def test_the_driver_refuses_other_code_than_the_rule_study_s(tmp_path: Path) -> None:
+    """Without --skip-build-check it runs only on the rule study's build (checked where this
+    checkout's package is another build: it refuses before anything is trained)."""
+    import hashlib
+
+    listed = subprocess.run(["git", "ls-files", "-s", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True)
+    if listed.returncode != 0:
+        pytest.skip("not a git checkout")
+    code = hashlib.sha256("\n".join(x for x in listed.stdout.splitlines() if x.endswith(".py")).encode()).hexdigest()
+    if code[:16] == design.RULE_STUDY_CODE:
+        pytest.skip("this checkout's package is the rule study's build: the driver would start the study")
+    where = ["--work", str(tmp_path / "w"), "--results", str(tmp_path / "r"), "--population", str(tmp_path / "p")]
+    done = subprocess.run([sys.executable, str(STUDY / "run.py"), *where], capture_output=True, text=True, timeout=120)
+    assert done.returncode != 0
+    assert "not the rule study's build" in done.stderr or "uncommitted code changes" in done.stderr
+    assert not (tmp_path / "r").exists() and not (tmp_path / "p").exists()
+
+
+@pytest.mark.slow
+def test_a_tiny_run_of_an_obstacle_setting_trains_its_own_population_and_all_three_kinds(tmp_path: Path) -> None:
+    """An obstacle setting needs nothing of the rule study: its 12 learned members and the judged
+    runs of all three kinds are trained here with the obstacles; a SIGTERM stops the driver
+    cleanly (143) and the same command finishes the study."""
+    import signal
+    import time
+
+    options = ["--preset", "quick", "--episodes", "8", "--budgets", "4,8", "--eval-episodes", "2", "--num-envs", "2"]
+    options += ["--checkpoint-every", "4", "--first", "1", "--step", "1", "--most", "1", "--skip-build-check"]
+    where = [f"--{k}={tmp_path / k}" for k in ("work", "results", "population", "rule-work", "rule-results")]
+    where.append(f"--rule-population={tmp_path / 'none'}")  # the rule study is not needed here
+    command = [sys.executable, str(STUDY / "run.py"), "--workers", "1", "--settings", "1p-high-obstacles4"]
+    command += ["--poll", "0", *where, *options]
+    log = tmp_path / "work" / "progress.log"
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 300
+        while not (log.exists() and "trained 1p-high-obstacles4" in log.read_text()):
+            assert process.poll() is None and time.monotonic() < deadline, (
+                process.stderr.read() if process.stderr else ""
+            )
+            time.sleep(0.2)
+        process.send_signal(signal.SIGTERM)
+        assert process.wait(timeout=300) == 143
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert "stopped: rerun the same command to resume" in log.read_text()
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    index = json.loads(
+        (tmp_path / "population" / "residual-study-obstacles4" / "1p-high" / "population.json").read_text()
+    )
+    assert index["obstacles"] == 4 and [m["name"] for m in index["members"]] == [
+        m["name"] for m in design.members("1p-high")
+    ]
+    member = tmp_path / "population" / "residual-study-obstacles4" / "1p-high" / "flat-seed1004" / "prey_0.safetensors"
+    header = json.loads(pretrained.read(member)[1]["training"])
+    assert header["obstacles"] == 4 and header["seed"] == 1004 and header["predator"] == "flat"
+    results = {p.name: json.loads(gzip.decompress(p.read_bytes())) for p in (tmp_path / "results" / "runs").iterdir()}
+    assert sorted(results) == sorted(f"1p-high-obstacles4-{k}-seed0.json.gz" for k in design.KINDS)
+    for run in results.values():
+        assert run["setting"] == "1p-high-obstacles4" and run["obstacles"] == 4 and len(run["pool"]["8"]) == 13
+        assert set(run["evaluated_by"].values()) == {"residual-study"}
+        if "ladders" in run:  # no obstacles ladder for runs trained with obstacles
+            assert sorted(run["ladders"]) == [
+                "delay=1",
+                "delay=3",
+                "delay=6",
+                "none",
+                "obs-noise=0.02",
+                "obs-noise=0.05",
+                "obs-noise=0.1",
+            ]
