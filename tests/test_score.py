@@ -2,6 +2,7 @@
 direct evaluation of the same episodes, the scored run kept out of its population, the
 interval's coverage, the aggregate, the refusals, and the leaderboard page regenerated."""
 
+import dataclasses
 import importlib.util
 import json
 import pickle
@@ -19,10 +20,12 @@ from scipy.special import expit
 from pursuit_bench import pretrained
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.env.task import obs_size
 from pursuit_bench.pretrained import populations
 from pursuit_bench.rules.policies import AlwaysChase
-from pursuit_bench.study import score
+from pursuit_bench.study import rule_study, score
 from pursuit_bench.training.evaluate import evaluate_agents
+from pursuit_bench.training.train import build_agents
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -116,6 +119,33 @@ def test_a_member_whose_weights_do_not_fit_its_slot_is_refused_before_play(
     population = populations.load("mine", "1p-high", folder=tmp_path)
     with pytest.raises(ValueError, match=f"^{where / 'm' / 'prey_0.safetensors'}: {message}$"):
         score.check_members(population)
+
+
+def test_a_member_trained_with_obstacles_loads_with_its_range_readings(tmp_path: Path) -> None:
+    """A prey trained among obstacles observes 12 range readings more: the population's loader
+    and the rule study's build it so (they built the plain size, and its weights did not fit)."""
+    config = dataclasses.replace(pretrained.training_config("1p-low"), obstacles=4)
+    wide = obs_size(2, True)
+    assert wide == obs_size(2) + 12
+    _, (fresh,) = build_agents([config], [wide])
+    paths = pretrained.export(fresh, config, tmp_path / "export", trained_episodes=1, provenance={})
+    (path,) = [p for p in paths if p.name == "prey_0.safetensors"]
+    where = tmp_path / "mine" / "1p-low"
+    (where / "m").mkdir(parents=True)
+    path.rename(where / "m" / "prey_0.safetensors")
+    member = {"name": "m", "kind": "hierarchical", "policy": None, "seed": 5, "trained": None}
+    index = {"population": "mine", "condition": "1p-low", "role": "prey", "provisional": False}
+    (where / populations.INDEX).write_text(
+        json.dumps({**index, "members": [{**member, "files": {"prey_0": "m/prey_0.safetensors"}}]})
+    )
+    (prey,) = populations.load("mine", "1p-low", folder=tmp_path).members[0].agents("1p-low", ["prey_0"]).values()
+    studied = rule_study.load_member(where / "m" / "prey_0.safetensors")
+    obs = np.random.default_rng(0).uniform(-1, 1, (5, wide)).astype(np.float32)
+    original = fresh["prey_0"]
+    assert isinstance(prey, LearningAgent) and isinstance(original, LearningAgent)
+    expected = original.learner.decisive_q(obs, original.member)
+    for loaded in (prey, studied):
+        np.testing.assert_array_equal(loaded.learner.decisive_q(obs, loaded.member), expected)
 
 
 def test_a_population_written_as_the_rule_study_writes_it_is_read_as_it_stands(tmp_path: Path) -> None:

@@ -110,7 +110,7 @@ class Member:
                     f"{path}: a {role} trained in {config.condition}, observing {obs_size(n_agents)} numbers; "
                     f"a {role} of {condition} observes {expected}"
                 )
-            _, (built,) = build_agents([config], [obs_size(n_agents)])
+            _, (built,) = build_agents([config], [obs_size(n_agents, config.obstacles > 0)])  # + range readings
             agent = built[header["agent"]]
             if not isinstance(agent, LearningAgent):
                 raise ValueError(f"{path}: agent {header['agent']!r} is not a learning agent in its training config")

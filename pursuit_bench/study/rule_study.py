@@ -130,7 +130,8 @@ def load_member(path: Path) -> Any:
 
     weights, header = pretrained.read(path)
     config = TrainConfig.from_dict(json.loads(header["training"]))
-    _, (agents,) = build_agents([config], [obs_size(len(CONDITIONS[config.condition].agent_names))])
+    n_agents = len(CONDITIONS[config.condition].agent_names)
+    _, (agents,) = build_agents([config], [obs_size(n_agents, config.obstacles > 0)])  # + range readings
     prey = agents[header["agent"]]
     if not isinstance(prey, LearningAgent) or prey.kind != header.get("kind"):
         raise ValueError(f"{path}: holds a {header.get('kind')} agent, not a learning prey")
