@@ -69,9 +69,10 @@ def test_a_missing_module_names_its_extra_in_one_line(monkeypatch) -> None:
     message = entry.missing_extra(ModuleNotFoundError("No module named 'torch'", name="torch"))
     assert message == (
         "Error: pursuit-bench train needs torch, which pursuit-bench's 'train' extra installs: "
-        "pip install 'pursuit-bench[train]'"
+        "pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, "
+        "then pip install 'pursuit-bench[train]'"
     )
-    assert "'ray' extra" in str(entry.missing_extra(ModuleNotFoundError(name="ray.util")))
+    assert str(entry.missing_extra(ModuleNotFoundError(name="ray.util"))).endswith(": pip install 'pursuit-bench[ray]'")
     assert entry.missing_extra(ModuleNotFoundError(name="stable_baselines3")) is None
 
 

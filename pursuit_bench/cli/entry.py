@@ -33,6 +33,8 @@ def missing_extra(error: ModuleNotFoundError) -> str | None:
         return None
     distribution, extra = EXTRA_OF[module]
     install = f"pip install 'pursuit-bench[{extra}]'"
+    if extra == "train":  # torch comes with it: its CPU build first, or pip takes the CUDA one (GBs)
+        install = f"pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, then {install}"
     if module == "click":  # the command line itself (an install of the environment alone)
         return f"Error: pursuit-bench's command line needs its '{extra}' extra: {install}"
     command = " ".join(["pursuit-bench", *(a for a in sys.argv[1:2] if not a.startswith("-"))])
