@@ -80,6 +80,23 @@ def test_the_report_finds_the_known_answer() -> None:
     assert summary["curves"]["1p-high"]["flat"]["episodes"] == [1500, 15000]
 
 
+def test_a_condition_whose_runs_are_not_all_in_is_left_out_and_named() -> None:
+    """A study still running: 2p-low-shared's flat runs not evaluated yet, and one of its
+    hierarchical seeds missing. 1p-high is judged exactly as alone; 2p-low-shared is named, with
+    its counts, in no test."""
+    runs = synthetic_runs()
+    partial = [r for r in runs if not (r["condition"] == "2p-low-shared" and (r["kind"] == "flat" or r["seed"] == 3))]
+    summary = rule_report.summarise(partial)
+    alone = rule_report.summarise([r for r in runs if r["condition"] == "1p-high"])
+    assert summary["primary"] == alone["primary"]
+    assert summary["in_progress"] == {"2p-low-shared": {"hierarchical": 11, "flat": 0}}
+    assert "**Not yet judged**" in rule_report.markdown(summary) and "in_progress" not in alone
+    uneven = [r for r in runs if not (r["condition"] == "2p-low-shared" and r["kind"] == "flat" and r["seed"] == 5)]
+    assert rule_report.summarise(uneven)["in_progress"] == {"2p-low-shared": {"hierarchical": 12, "flat": 11}}
+    with pytest.raises(ValueError, match="no setting has its judged runs of every kind yet"):
+        rule_report.summarise([r for r in runs if r["kind"] == "hierarchical"])
+
+
 def test_a_member_that_decides_a_verdict_shows_in_the_leave_one_out_range() -> None:
     runs = synthetic_runs()
     for r in runs:  # against one member only, the hierarchical runs of 2p-low-shared predator_0 fall behind

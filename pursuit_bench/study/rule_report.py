@@ -215,6 +215,20 @@ def curves(runs: list[dict[str, Any]], keys: list[str], kinds: tuple[str, ...] =
     return out
 
 
+def complete_settings(
+    runs: list[dict[str, Any]], kinds: tuple[str, ...] = KINDS
+) -> tuple[list[dict[str, Any]], dict[str, dict[str, int]]]:
+    """The runs of the settings whose judged runs are complete so far (every kind holds the same
+    seeds, two or more: a seed step fully trained and evaluated), and the runs per kind of the
+    others, which a study still running has not finished: they are left out of every test."""
+    seeds: dict[str, dict[str, set[int]]] = {}
+    for r in runs:
+        seeds.setdefault(setting_of(r), {k: set() for k in kinds}).setdefault(r["kind"], set()).add(r["seed"])
+    done = {c for c, by in seeds.items() if len({frozenset(by[k]) for k in kinds}) == 1 and len(by[kinds[0]]) >= 2}
+    waiting = {c: {k: len(by[k]) for k in kinds} for c, by in seeds.items() if c not in done}
+    return [r for r in runs if setting_of(r) in done], waiting
+
+
 def summarise(
     runs: list[dict[str, Any]],
     margin: float = statistics.EQUIVALENCE_MARGIN,
@@ -228,6 +242,9 @@ def summarise(
     (``differs``: :func:`corrections`)."""
     if not runs:
         raise ValueError("no judged runs: expected results/rule-study/runs/*.json.gz")
+    runs, in_progress = complete_settings(runs, kinds)
+    if not runs:
+        raise ValueError(f"no setting has its judged runs of every kind yet (in progress: {in_progress})")
     protocols = {r.get("protocol") for r in runs}
     if len(protocols) != 1:
         raise ValueError(f"the runs were evaluated by different protocols {sorted(map(str, protocols))}: not mixed")
@@ -262,6 +279,7 @@ def summarise(
         "failure_margin": rule_study.FAILURE_MARGIN,
         "budgets": [int(b) for b in keys],
         "runs": {k: {c: len(_runs_of(runs, c, k)) for c in dict.fromkeys(setting_of(r) for r in runs)} for k in kinds},
+        **({"in_progress": in_progress} if in_progress else {}),
         "primary": {"measure": f"pool return at {final} episodes", "counts": counts, "panels": primary},
         "secondary": {
             "margin": {"counts": margin_counts, "panels": secondary_margin},
@@ -468,8 +486,16 @@ def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MA
             "",
             corrections_markdown(s["corrections"], differs),
         ]
+    if summary.get("in_progress"):
+        waiting = "; ".join(
+            f"{c} ({', '.join(f'{n} {k}' for k, n in by.items())})" for c, by in summary["in_progress"].items()
+        )
+        extra_top = [f"**Not yet judged** (their runs are still being trained or evaluated; left out): {waiting}.", ""]
+    else:
+        extra_top = []
     return "\n".join(
         [
+            *extra_top,
             f"## Primary: the pool return at {final} episodes, {compared}",
             "",
             f"{counts_line(summary['primary']['counts'])} (Welch, Holm over "
