@@ -588,7 +588,7 @@ def leaderboard_header(conditions: list[str]) -> str:
 def markdown(result: dict[str, Any]) -> str:
     """score.md: the leaderboard row and the per-condition table."""
     conditions = list(result["conditions"])
-    provisional = " (PROVISIONAL population: the rule study's is not committed yet)" if result["provisional"] else ""
+    provisional = " (PROVISIONAL population, built from the shipped agents)" if result["provisional"] else ""
     refs = list(next(iter(result["conditions"].values()))["references"])
     lines = [
         f"# Score of {result['agent']} as {result['role']}",
