@@ -231,12 +231,13 @@ def test_a_scripted_agents_score_is_a_direct_evaluation_of_the_same_episodes() -
 def test_the_scored_run_is_kept_out_of_its_population() -> None:
     condition = "3p-low-shared"
     contestant = score.resolve("pretrained:3p-low-individual", "predator")
-    population = populations.load(populations.default("predator"), condition)
+    name = populations.PROVISIONAL["prey"]  # it holds the shipped prey of the other conditions
+    population = populations.load(name, condition)
     assert "shipped-3p-low-individual" in [m.name for m in population.members]
     assert score.excluded_members(contestant, population) == {
         "shipped-3p-low-individual": "holds weights of the scored run"
     }
-    result = score.score(contestant, [condition], episodes=2, seed=0)
+    result = score.score(contestant, [condition], episodes=2, seed=0, population=name)
     found = result["conditions"][condition]
     assert "shipped-3p-low-individual" not in found["members"] and found["excluded"]
     # the hierarchical reference of each condition is its own run: nothing of another condition is excluded
