@@ -134,15 +134,7 @@ def test_primary_verdicts_recomputed_by_an_independent_formula() -> None:
         p_equivalent.append(max(upper, lower))
         row["_mean"] = np.mean(h) - np.mean(f)
 
-    def holm(values: list[float]) -> list[float]:
-        m, order = len(values), np.argsort(values)
-        adjusted, running = [0.0] * m, 0.0
-        for rank, i in enumerate(order):
-            running = max(running, min(1.0, (m - rank) * values[i]))
-            adjusted[i] = running
-        return adjusted
-
-    for row, ph, pe in zip(rows, holm(p), holm(p_equivalent), strict=True):
+    for row, ph, pe in zip(rows, _holm(p), _holm(p_equivalent), strict=True):
         expected = (
             ("rule helps" if row["_mean"] > 0 else "flat better") if ph <= 0.05
             else "equivalent" if pe <= 0.025 else "not resolved"
