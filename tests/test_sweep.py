@@ -202,6 +202,30 @@ def test_a_sweep_extends_to_more_episodes_and_names_what_else_differs(tmp_path: 
     assert code == 2 and "episodes: 12 → 6" in output, output
 
 
+def test_a_signal_just_after_the_plan_is_written_stops_the_sweep(tmp_path: Path, monkeypatch) -> None:
+    """A SIGTERM that lands between writing the plan and starting the workers is acted on:
+    no worker starts and the command exits 143. The process ignores SIGTERM until the command
+    catches it (as a harness that starts tests with it ignored leaves it), so a signal that
+    came before the catcher was in place would be lost and the sweep would train on."""
+    from pursuit_bench.training import sweep as sweeps
+
+    write_plan = sweeps.open_sweep
+
+    def write_plan_then_signal(out: Path, plan: SweepPlan) -> str | None:
+        note = write_plan(out, plan)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return note
+
+    monkeypatch.setattr(sweeps, "open_sweep", write_plan_then_signal)
+    previous = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        code, output = run_cli(*SWEEP, "--workers", "1", "--no-record", "--out", str(tmp_path / "s"))
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert code == 143 and "0 of 4 runs with a checkpoint" in output, output
+    assert not (tmp_path / "s" / "runs").exists() or not any((tmp_path / "s" / "runs").iterdir())
+
+
 def test_a_stopped_sweep_says_what_it_saved(tmp_path: Path, processes) -> None:
     out = tmp_path / "s"
     command = [sys.executable, "-m", "pursuit_bench.cli.main", *SWEEP, "--episodes", "100000", "--out", str(out)]

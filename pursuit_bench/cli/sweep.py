@@ -119,61 +119,63 @@ def sweep(
     from pursuit_bench.study.plots import reward_bars_png
     from pursuit_bench.training import sweep as sweeps
 
-    overrides = {k: v for k, v in hyperparameters.items() if v is not None}
-    try:
-        agent = PRESETS[preset].replace(**overrides)
-        plan = sweeps.SweepPlan(
-            conditions=chosen,
-            seeds=seeds,
-            predators=kinds,
-            agent=agent,
-            episodes=episodes or agent.episodes,
-            eval_episodes=eval_episodes,
-            num_envs=num_envs or PRESET_ARENAS[preset],
-            backend=physics,
-            record_every=recording_every(no_record, record_every),
-            checkpoint_every=checkpoint_every,
-            preset=preset,
-            keep_checkpoints=kept,
-            obstacles=obstacles,
-            obstacle_radius=obstacle_radius,
-            avoidance=avoidance,
-        )
-        note = sweeps.open_sweep(out, plan)
-    except ValueError as error:
-        raise BadInput(in_option_words(error)) from None
-    if note:
-        click.echo(f"{out}: {note}", err=True)
-    configs = plan.runs()
-    status = {name: sweeps.run_status(out / "runs" / name, c, plan.keep_checkpoints) for name, c in configs.items()}
-    done = {name: episodes for name, (episodes, _) in status.items()}
-    finished = {name for name, (_, evaluated) in status.items() if evaluated}
-    total = sum(c.episodes for c in configs.values())
-    per_episode = {name: sweeps.expected_cost(c) / c.episodes for name, c in configs.items()}
-
-    def work_done() -> float:  # the ETA counts expected transitions × learners, not episodes
-        return sum(per_episode[name] * n for name, n in done.items())
-
-    work_total = sum(sweeps.expected_cost(c) for c in configs.values())
-    start, start_work = time.monotonic(), work_done()
-
-    def describe() -> str:
-        rate = (work_done() - start_work) / max(time.monotonic() - start, 1e-9)
-        eta = (work_total - work_done()) / rate if rate > 0 else float("nan")
-        left = "?" if eta != eta else time.strftime("%H:%M:%S", time.gmtime(eta))
-        return f"runs done {len(finished)}/{len(configs)} | ETA {left}"
-
-    progress = Progress(f"sweep {out}", total, sum(done.values()), describe, every_episodes=log_every)
-
-    def on_message(kind: str, name: str, value: Any) -> None:
-        if kind == "episode":
-            done[name] = max(done[name], int(value))
-        elif kind == "done":
-            finished.add(name)
-        progress.update(sum(done.values()))
-
-    workers = workers or os.cpu_count() or 1
+    # signals are caught from before the plan is written: one that lands before the workers start
+    # stops the sweep there (a process started with SIGTERM ignored would otherwise miss it)
     with SignalCatcher(raise_at_once=False).active() as signals:
+        overrides = {k: v for k, v in hyperparameters.items() if v is not None}
+        try:
+            agent = PRESETS[preset].replace(**overrides)
+            plan = sweeps.SweepPlan(
+                conditions=chosen,
+                seeds=seeds,
+                predators=kinds,
+                agent=agent,
+                episodes=episodes or agent.episodes,
+                eval_episodes=eval_episodes,
+                num_envs=num_envs or PRESET_ARENAS[preset],
+                backend=physics,
+                record_every=recording_every(no_record, record_every),
+                checkpoint_every=checkpoint_every,
+                preset=preset,
+                keep_checkpoints=kept,
+                obstacles=obstacles,
+                obstacle_radius=obstacle_radius,
+                avoidance=avoidance,
+            )
+            note = sweeps.open_sweep(out, plan)
+        except ValueError as error:
+            raise BadInput(in_option_words(error)) from None
+        if note:
+            click.echo(f"{out}: {note}", err=True)
+        configs = plan.runs()
+        status = {name: sweeps.run_status(out / "runs" / name, c, plan.keep_checkpoints) for name, c in configs.items()}
+        done = {name: episodes for name, (episodes, _) in status.items()}
+        finished = {name for name, (_, evaluated) in status.items() if evaluated}
+        total = sum(c.episodes for c in configs.values())
+        per_episode = {name: sweeps.expected_cost(c) / c.episodes for name, c in configs.items()}
+
+        def work_done() -> float:  # the ETA counts expected transitions × learners, not episodes
+            return sum(per_episode[name] * n for name, n in done.items())
+
+        work_total = sum(sweeps.expected_cost(c) for c in configs.values())
+        start, start_work = time.monotonic(), work_done()
+
+        def describe() -> str:
+            rate = (work_done() - start_work) / max(time.monotonic() - start, 1e-9)
+            eta = (work_total - work_done()) / rate if rate > 0 else float("nan")
+            left = "?" if eta != eta else time.strftime("%H:%M:%S", time.gmtime(eta))
+            return f"runs done {len(finished)}/{len(configs)} | ETA {left}"
+
+        progress = Progress(f"sweep {out}", total, sum(done.values()), describe, every_episodes=log_every)
+
+        def on_message(kind: str, name: str, value: Any) -> None:
+            if kind == "episode":
+                done[name] = max(done[name], int(value))
+            elif kind == "done":
+                finished.add(name)
+            progress.update(sum(done.values()))
+
+        workers = workers or os.cpu_count() or 1
         try:
             complete = sweeps.run_sweep(
                 out,
