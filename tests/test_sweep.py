@@ -149,6 +149,7 @@ def test_the_ray_backend_without_ray_says_which_extra(tmp_path: Path, monkeypatc
         str(tmp_path / "s"),
     )
     assert code == 2 and "pip install 'pursuit-bench[ray]'" in output and "Traceback" not in output
+    assert not (tmp_path / "s").exists()  # refused before the plan is written
 
 
 def test_stacks_are_planned_by_expected_cost() -> None:

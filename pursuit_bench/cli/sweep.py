@@ -142,6 +142,7 @@ def sweep(
                 obstacle_radius=obstacle_radius,
                 avoidance=avoidance,
             )
+            sweeps.check_executor(backend)  # before the plan is written: a refused sweep leaves no folder
             note = sweeps.open_sweep(out, plan)
         except ValueError as error:
             raise BadInput(in_option_words(error)) from None
