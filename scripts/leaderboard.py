@@ -60,7 +60,7 @@ def tables(results: Path = RESULTS) -> str:
         for row, result in mine:
             normalized = {c: v["normalized"] for c, v in result["conditions"].items()}
             aggregate = score.aggregate_text(result["aggregate"])
-            cells = ["–" if normalized.get(c) is None else f"{normalized[c]:.2f}" for c in conditions]
+            cells = ["–" if normalized.get(c) is None else score.fixed(normalized[c], ".2f") for c in conditions]
             who = row["who"]
             if lacks := shortfall(result):
                 who = f"{who} {PARTIAL}"

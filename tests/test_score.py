@@ -442,3 +442,8 @@ def test_a_partial_score_is_marked_and_listed_after_the_full_ones(tmp_path: Path
     assert "- few-conditions: 2 of 10 conditions (1p-low, 1p-high)\n" in text
     assert "- few-episodes: 5 episodes per member, not 20\n" in text
     assert "† **Partial**" in text and leaderboard.tables(tmp_path) == text
+
+
+def test_a_score_that_rounds_to_zero_is_printed_without_a_minus_sign() -> None:
+    assert [score.fixed(v, ".2f") for v in (-0.001, 0.0, -0.006, 0.004)] == ["0.00", "0.00", "-0.01", "0.00"]
+    assert [score.fixed(v, "+.3f") for v in (-0.0001, 0.0004, -0.0006)] == ["+0.000", "+0.000", "-0.001"]

@@ -11,6 +11,7 @@ from pathlib import Path
 import click
 
 from pursuit_bench.cli.options import BadInput, OutFolder, check_out_folder
+from pursuit_bench.cli.wording import counted
 
 
 @click.command(short_help="A sweep's panels judged over seeds (better / not resolved / worse); a run's curves.")
@@ -50,7 +51,7 @@ def report(where: Path, out: Path | None) -> None:
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(
-        f"{totals['panels']} panels: {totals['better']} better, {totals['equivalent']} equivalent, "
+        f"{counted(totals['panels'], 'panel')}: {totals['better']} better, {totals['equivalent']} equivalent, "
         f"{totals['not resolved']} not resolved, {totals['worse']} worse (paired by seed, Holm-corrected); "
         f"highest mean in {totals['hierarchical_best']}"
     )

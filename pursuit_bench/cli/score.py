@@ -11,6 +11,7 @@ from pathlib import Path
 import click
 
 from pursuit_bench.cli.options import BadInput, OutFolder, names, threads_option
+from pursuit_bench.cli.wording import counted
 from pursuit_bench.env.conditions import CONDITIONS
 
 
@@ -80,7 +81,7 @@ def score(
     total = sum(len(p.members) for p in pops.values()) * episodes * n_refs
     done = [0]
     progress = Progress(
-        f"score {agent}", total, 0, lambda: f"{len(pops)} conditions", every_episodes=max(total // 20, 1)
+        f"score {agent}", total, 0, lambda: counted(len(pops), "condition"), every_episodes=max(total // 20, 1)
     )
 
     def on_episodes(n: int) -> None:

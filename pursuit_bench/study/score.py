@@ -549,12 +549,19 @@ def score(
 # ------------------------------------------------------------------ the report
 
 
+def fixed(value: float, spec: str) -> str:
+    """``value`` in the format ``spec`` ("+.3f", ".2f"), with no minus sign on a value that
+    rounds to zero ("0.00", not "-0.00")."""
+    text = format(value, spec)
+    return format(0.0, spec) if float(text) == 0 else text
+
+
 def _interval(ci: list[float] | None) -> str:
-    return "–" if ci is None else f"[{ci[0]:+.3f}, {ci[1]:+.3f}]"
+    return "–" if ci is None else f"[{fixed(ci[0], '+.3f')}, {fixed(ci[1], '+.3f')}]"
 
 
 def _number(value: float | None) -> str:
-    return "–" if value is None else f"{value:.2f}"
+    return "–" if value is None else fixed(value, ".2f")
 
 
 def leaderboard_row(result: dict[str, Any], how: str = "", budget: str = "") -> str:
@@ -573,7 +580,7 @@ def aggregate_text(agg: dict[str, Any]) -> str:
     """The aggregate with its interval, and over how many conditions where some had no normalized score."""
     if agg["iqm"] is None:
         return "–"
-    text = f"{agg['iqm']:.2f} [{agg['ci'][0]:.2f}, {agg['ci'][1]:.2f}]"
+    text = f"{fixed(agg['iqm'], '.2f')} [{fixed(agg['ci'][0], '.2f')}, {fixed(agg['ci'][1], '.2f')}]"
     used = len(agg["conditions"])
     return text + (f" ({used} of {used + len(agg['undefined'])} conditions)" if agg["undefined"] else "")
 
@@ -607,8 +614,8 @@ def markdown(result: dict[str, Any]) -> str:
     for condition, c in result["conditions"].items():
         excluded = f" (excluded: {', '.join(c['excluded'])})" if c["excluded"] else ""
         lines.append(
-            f"| {condition} | {c['mean_return']:+.3f} {_interval(c['ci'])} | {_number(c['normalized'])} | "
-            + " | ".join(f"{c['references'][r]['mean_return']:+.3f}" for r in refs)
+            f"| {condition} | {fixed(c['mean_return'], '+.3f')} {_interval(c['ci'])} | {_number(c['normalized'])} | "
+            + " | ".join(fixed(c["references"][r]["mean_return"], "+.3f") for r in refs)
             + f" | {', '.join(c['members'])}{excluded} |"
         )
     lines += ["", f"Interval: {result['interval']}. Normalization: {result['normalization']}.", ""]
