@@ -2,9 +2,10 @@
 missing, one line that names the extra to install instead of a traceback.
 
 ``pip install pursuit-bench`` installs the environment alone (numpy, pymunk, Gymnasium,
-PettingZoo, numba); the commands need the ``train`` extra (torch, Rerun, click, …) and
-``sweep --backend ray`` the ``ray`` extra (pyproject.toml). This module imports nothing but the
-standard library before it has caught what is missing: click itself is one of them.
+PettingZoo, numba) and click: ``--help`` and ``conditions`` work with it; the other commands
+need the ``train`` extra (torch, Rerun, …) and ``sweep --backend ray`` the ``ray`` extra
+(pyproject.toml). This module imports nothing but the standard library before it has caught
+what is missing.
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ import sys
 #: Each module the commands import that the environment's install lacks: (the distribution
 #: that holds it, the extra that installs it). tests/test_install.py checks it against pyproject.toml.
 EXTRA_OF: dict[str, tuple[str, str]] = {
-    "click": ("click", "train"),
     "torch": ("torch", "train"),
     "rerun": ("rerun-sdk", "train"),
     "matplotlib": ("matplotlib", "train"),
@@ -35,8 +35,6 @@ def missing_extra(error: ModuleNotFoundError) -> str | None:
     install = f"pip install 'pursuit-bench[{extra}]'"
     if extra == "train":  # torch comes with it: its CPU build first, or pip takes the CUDA one (GBs)
         install = f"pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, then {install}"
-    if module == "click":  # the command line itself (an install of the environment alone)
-        return f"Error: pursuit-bench's command line needs its '{extra}' extra: {install}"
     command = " ".join(["pursuit-bench", *(a for a in sys.argv[1:2] if not a.startswith("-"))])
     return f"Error: {command} needs {distribution}, which pursuit-bench's '{extra}' extra installs: {install}"
 
