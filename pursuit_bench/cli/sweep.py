@@ -142,7 +142,7 @@ def sweep(
                 obstacle_radius=obstacle_radius,
                 avoidance=avoidance,
             )
-            sweeps.check_executor(backend)  # before the plan is written: a refused sweep leaves no folder
+            _check_backend(backend)  # before the plan is written: a refused sweep leaves no folder
             note = sweeps.open_sweep(out, plan)
         except ValueError as error:
             raise BadInput(in_option_words(error)) from None
@@ -212,3 +212,14 @@ def sweep(
     click.echo(f"sweep {out}: {len(finished)} of {len(configs)} runs trained and evaluated")
     if not complete:
         raise click.ClickException("some runs are not finished; rerun the same command to go on")
+
+
+def _check_backend(backend: str) -> None:
+    """A ValueError saying what to install if the sweep cannot run on ``backend`` here (Ray not
+    installed). Here, not in training/sweep.py: the residual study requires training's files to be
+    the rule study's build's (studies/residual-value/design.py)."""
+    if backend == "ray":
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            raise ValueError("--backend ray needs Ray: pip install 'pursuit-bench[ray]'") from None

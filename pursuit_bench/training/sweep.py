@@ -349,18 +349,6 @@ def run_stack(out: Path, names: list[str], messages: Any, work: Work = Work()) -
             messages.put(("done", name, None))
 
 
-def check_executor(executor: str) -> None:
-    """A ValueError saying what is missing if the sweep cannot run on ``executor`` here (Ray
-    not installed): checked before the sweep's plan is written."""
-    if executor not in ("local", "ray"):
-        raise ValueError(f"executor={executor!r}: expected 'local' or 'ray'")
-    if executor == "ray":
-        try:
-            import ray  # noqa: F401
-        except ImportError:
-            raise ValueError("--backend ray needs Ray: pip install 'pursuit-bench[ray]'") from None
-
-
 def run_sweep(
     out: Path,
     plan: SweepPlan,
@@ -389,11 +377,12 @@ def run_sweep(
     ]
     tasks = stacks(plan, todo, workers)
     work = Work(record, threads, figure)
-    check_executor(executor)
     if executor == "ray":
         _run_on_ray(out, tasks, workers, address, on_message, should_stop, work)
-    else:
+    elif executor == "local":
         _run_locally(out, tasks, workers, on_message, should_stop, work)
+    else:
+        raise ValueError(f"executor={executor!r}: expected 'local' or 'ray'")
     return all(run_status(out / "runs" / name, config, plan.keep_checkpoints)[1] for name, config in configs.items())
 
 
@@ -481,9 +470,10 @@ def _run_on_ray(
 ) -> None:
     """Every stack a Ray task (``threads`` CPUs: a stack trains on that many torch threads), retried if its node is
     lost; the driver writes what each returns into ``out``, run folder by run folder."""
-    check_executor("ray")
-    import ray
-
+    try:
+        import ray
+    except ImportError:
+        raise ValueError("--backend ray needs Ray: pip install 'pursuit-bench[ray]'") from None
     if address is None:
         ray.init(num_cpus=workers, include_dashboard=False, object_store_memory=200 * 2**20, log_to_driver=False)
     else:
