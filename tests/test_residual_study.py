@@ -207,21 +207,23 @@ def _rule_study_s_training_code() -> dict[str, str]:
 def test_the_training_code_is_every_file_training_imports_and_its_fingerprint_the_rule_study_s() -> None:
     """TRAINING_CODE is the fingerprint of the rule study's build's training files (from git); the
     set holds the package's __init__ and every module of io, env, rules, agents and training but
-    the evaluation; what those modules import (function-local imports and module names in strings
-    too) is in the set, or the evaluation."""
+    the evaluation; what those modules import at that build (function-local imports and module
+    names in strings too) is in the set, or the evaluation."""
     files = _rule_study_s_training_code()
     assert design.training_code(files) == design.TRAINING_CODE and len(files) == 42
     assert "pursuit_bench/__init__.py" in files and "pursuit_bench/training/sweep.py" in files
     assert not set(design.NOT_TRAINING) & set(files)
-    listing = _git(ROOT, "ls-tree", "-r", "--name-only", "HEAD", "--", "pursuit_bench").splitlines()
+    listing = _git(ROOT, "ls-tree", "-r", "--name-only", design.RULE_STUDY_COMMIT, "--", "pursuit_bench")
     modules = {
-        ".".join(Path(p).with_suffix("").parts).removesuffix(".__init__"): p for p in listing if p.endswith(".py")
+        ".".join(Path(p).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in listing.splitlines()
+        if p.endswith(".py")
     }
-    here = design.training_files(_git(ROOT, "ls-tree", "-r", "HEAD", "--", "pursuit_bench"))
-    allowed = {m for m, p in modules.items() if p in here or p in design.NOT_TRAINING}
-    assert len(here) == 42 and len(allowed) == 43
-    for path in here:
-        for node in ast.walk(ast.parse((ROOT / path).read_text())):
+    allowed = {m for m, p in modules.items() if p in files or p in design.NOT_TRAINING}
+    assert len(allowed) == 43
+    for path in files:
+        source = _git(ROOT, "show", f"{design.RULE_STUDY_COMMIT}:{path}")
+        for node in ast.walk(ast.parse(source)):
             named = []
             if isinstance(node, ast.Import):
                 named = [a.name for a in node.names]

@@ -16,9 +16,10 @@ It runs on one build of ``main`` (PLAN.md, "The build"), pinned at its first sta
 the rule study's driver computes it, and of the training code): it refuses any other package code
 from then on. The build's training code (``design.TRAINING_CODE``: the package's files that
 training reads, all but the evaluation) must be the rule study's, file for file, since the rule
-study's hierarchical and flat runs, trained by its build (commit ec5779b), are reused; every
-evaluation, the ladders of the reused runs included, is this build's. The study's own logic is
-here and in design.py.
+study's hierarchical and flat runs, trained by its build (commit ec5779b), are reused. Every
+evaluation made here is this build's, the ladders of the reused runs included; those taken from the
+rule study's results are its build's, which the replay check shows this build reproduces to the
+bit. The study's own logic is here and in design.py.
 """
 
 from __future__ import annotations
