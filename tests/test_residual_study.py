@@ -1,8 +1,10 @@
 """The residual study's design and driver (issue 48; docs/residual.md, "Protocol of the residual
 study"): the population is disjoint from the judged runs and holds no twins, the plan lists what
-the protocol says, the seed rule reads all three kinds, and a tiny run of the driver reuses a rule
-study's runs (one of them trained again, exactly) and writes every compact result."""
+the protocol says, the seed rule reads all three kinds, the driver runs only on a build whose
+training code is the rule study's and, once pinned, only on that build, and a tiny run of the driver
+reuses a rule study's runs (one of them trained again, exactly) and writes every compact result."""
 
+import ast
 import gzip
 import importlib.util
 import json
@@ -74,7 +76,7 @@ def test_the_plan_lists_what_the_protocol_says() -> None:
         assert row["ladder_kinds"] == ["residual", "hierarchical"]
     protocol = (ROOT / "docs" / "residual.md").read_text()
     assert "## Protocol of the residual study" in protocol
-    assert f"`{design.RULE_STUDY_CODE}`" in protocol  # the build it runs on, named in the protocol
+    assert f"`{design.TRAINING_CODE}`" in protocol  # the training code it runs with, named in the protocol
 
 
 def test_the_build_is_the_rule_study_s() -> None:
@@ -188,22 +190,127 @@ def index_names(index: dict) -> list[str]:
     return [m["name"] for m in index["members"]]
 
 
-def test_the_driver_refuses_other_code_than_the_rule_study_s(tmp_path: Path) -> None:
-    """Without --skip-build-check it runs only on the rule study's build (checked where this
-    checkout's package is another build: it refuses before anything is trained)."""
-    import hashlib
+def _git(root: Path, *args: str) -> str:
+    command = ["git", "-c", "user.name=test", "-c", "user.email=test@example.com", *args]
+    return subprocess.run(command, cwd=root, capture_output=True, text=True, check=True).stdout
 
-    listed = subprocess.run(["git", "ls-files", "-s", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True)
-    if listed.returncode != 0:
-        pytest.skip("not a git checkout")
-    code = hashlib.sha256("\n".join(x for x in listed.stdout.splitlines() if x.endswith(".py")).encode()).hexdigest()
-    if code[:16] == design.RULE_STUDY_CODE:
-        pytest.skip("this checkout's package is the rule study's build: the driver would start the study")
-    where = ["--work", str(tmp_path / "w"), "--results", str(tmp_path / "r"), "--population", str(tmp_path / "p")]
-    done = subprocess.run([sys.executable, str(STUDY / "run.py"), *where], capture_output=True, text=True, timeout=120)
-    assert done.returncode != 0
-    assert "not the rule study's build" in done.stderr or "uncommitted code changes" in done.stderr
-    assert not (tmp_path / "r").exists() and not (tmp_path / "p").exists()
+
+def _rule_study_s_training_code() -> dict[str, str]:
+    """The training code's files at the rule study's build, from this checkout's history."""
+    try:
+        listing = _git(ROOT, "ls-tree", "-r", design.RULE_STUDY_COMMIT, "--", "pursuit_bench")
+    except (subprocess.CalledProcessError, FileNotFoundError):
+        pytest.skip("the rule study's commit is not in this checkout's history")
+    return design.training_files(listing)
+
+
+def test_the_training_code_is_every_file_training_imports_and_its_fingerprint_the_rule_study_s() -> None:
+    """TRAINING_CODE is the fingerprint of the rule study's build's training files (from git); the
+    set holds the package's __init__ and every module of io, env, rules, agents and training but
+    the evaluation; what those modules import at that build (function-local imports and module
+    names in strings too) is in the set, or the evaluation."""
+    files = _rule_study_s_training_code()
+    assert design.training_code(files) == design.TRAINING_CODE and len(files) == 42
+    assert "pursuit_bench/__init__.py" in files and "pursuit_bench/training/sweep.py" in files
+    assert not set(design.NOT_TRAINING) & set(files)
+    listing = _git(ROOT, "ls-tree", "-r", "--name-only", design.RULE_STUDY_COMMIT, "--", "pursuit_bench")
+    modules = {
+        ".".join(Path(p).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in listing.splitlines()
+        if p.endswith(".py")
+    }
+    allowed = {m for m, p in modules.items() if p in files or p in design.NOT_TRAINING}
+    assert len(allowed) == 43
+    for path in files:
+        source = _git(ROOT, "show", f"{design.RULE_STUDY_COMMIT}:{path}")
+        for node in ast.walk(ast.parse(source)):
+            named = []
+            if isinstance(node, ast.Import):
+                named = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:  # a module, or a name of one
+                named = [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+                named = [node.value.split(":")[0]] if node.value.startswith("pursuit_bench.") else []
+            for name in (n for n in named if n.startswith("pursuit_bench")):
+                module = name if name in modules else name.rsplit(".", 1)[0]
+                assert module in allowed, f"{path} imports {name}, outside the training code"
+
+
+def _checkout(tmp: Path) -> Path:
+    """A git checkout holding the rule study's build's training code (and its evaluate.py)."""
+    _rule_study_s_training_code()
+    paths = [p.rstrip("/") for p in design.TRAINING_CODE_PATHS]
+    archive = subprocess.run(
+        ["git", "archive", design.RULE_STUDY_COMMIT, "--", *paths], cwd=ROOT, capture_output=True, check=True
+    ).stdout
+    root = tmp / "checkout"
+    root.mkdir()
+    subprocess.run(["tar", "-x", "-C", str(root)], input=archive, check=True)
+    _git(root, "init", "-q")
+    _git(root, "add", "-A")
+    _git(root, "commit", "-q", "-m", "the rule study's training code")
+    return root
+
+
+def _commit(root: Path, path: str, line: str) -> None:
+    with (root / path).open("a") as file:
+        file.write(line + "\n")
+    _git(root, "add", "-A")
+    _git(root, "commit", "-q", "-m", f"changed {path}")
+
+
+def _run_module() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("residual_run", STUDY / "run.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_a_package_whose_training_code_is_not_the_rule_study_s_is_refused_naming_the_files(tmp_path: Path) -> None:
+    run = _run_module()
+    root = _checkout(tmp_path)
+    first = run.package_build(root)
+    assert first["training_code"] == design.TRAINING_CODE
+    _commit(root, "pursuit_bench/training/evaluate.py", "# the evaluation is not training")
+    second = run.package_build(root)
+    assert second["training_code"] == first["training_code"] and second["code"] != first["code"]
+    (root / "pursuit_bench/agents/dqn.py").write_text((root / "pursuit_bench/agents/dqn.py").read_text() + "#\n")
+    with pytest.raises(SystemExit, match="uncommitted code changes"):
+        run.package_build(root)
+    _git(root, "commit", "-q", "-a", "-m", "dqn")
+    _commit(root, "pursuit_bench/env/extra.py", "X = 1")
+    with pytest.raises(SystemExit) as refused:
+        run.package_build(root)
+    message = str(refused.value)
+    assert "\n" not in message and "not the rule study's" in message and design.TRAINING_CODE in message
+    assert message.endswith(": pursuit_bench/agents/dqn.py, pursuit_bench/env/extra.py")
+
+
+def test_the_pinned_build_is_refused_once_the_package_changes(tmp_path: Path) -> None:
+    """The first start writes build.json; a later start with other package code (the training
+    code still the rule study's) is refused, the same code goes on; a lost build.json is not
+    written again over the study's results."""
+    run = _run_module()
+    root = _checkout(tmp_path)
+    pinned, results = tmp_path / "build.json", tmp_path / "results"
+    started = run.package_build(root)
+    run.pin(pinned, started, results)
+    assert {k: v for k, v in json.loads(pinned.read_text()).items() if k != "pinned"} == started
+    run.pin(pinned, run.package_build(root), results)  # a resume: the same build
+    _commit(root, "pursuit_bench/training/evaluate.py", "# main went on")
+    later = run.package_build(root)
+    with pytest.raises(SystemExit) as refused:
+        run.pin(pinned, later, results)
+    message = str(refused.value)
+    assert "\n" not in message and "not mixed" in message
+    assert started["code"] in message and later["code"] in message
+    pinned.unlink()
+    (results / "runs").mkdir(parents=True)
+    (results / "runs" / "1p-high-residual-seed0.json.gz").write_bytes(b"")
+    with pytest.raises(SystemExit, match="restore it from git"):
+        run.pin(pinned, later, results)
+    assert not pinned.exists()
 
 
 @pytest.mark.slow

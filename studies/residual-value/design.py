@@ -2,22 +2,58 @@
 settings, kinds, seeds, population, comparisons, ladders and seed rule. Pure data and small
 functions (no torch): ``run.py`` drives the study by it, ``tests/test_residual_study.py`` checks it.
 
-It must work with the rule study's build (commit ec5779b) as it is, so nothing here is in the
-package: it reads the package's constants where the rule study fixed them, and adds only what the
-residual study adds.
+Nothing here is in the package: it reads the package's constants where the rule study fixed them,
+and adds only what the residual study adds. Run as a script, it prints the fingerprint of the
+training code in ``git ls-tree -r REV -- pursuit_bench``'s listing on its input (:data:`TRAINING_CODE`).
 """
 
 from __future__ import annotations
 
+import hashlib
+import sys
 from typing import Any
 
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.study import rule_study
 
-#: The rule study's build: the package code every run of this study is trained and evaluated by
-#: (``studies/rule-value/run.py``'s fingerprint of the package's tracked .py files, and its commit).
+#: The rule study's build (``studies/rule-value/build.json``), which trained the hierarchical and
+#: flat runs reused here: its commit and ``studies/rule-value/run.py``'s fingerprint of the
+#: package's tracked .py files. This study runs on a later build (PLAN.md, "The build"), pinned in
+#: ``build.json`` beside this file, whose training code must be this build's (:data:`TRAINING_CODE`).
 RULE_STUDY_CODE = "cc950401500232df"
 RULE_STUDY_COMMIT = "ec5779b6759f318367ef65b14b1a83533ccce805"
+
+#: The training code: the package's files a run's training reads. A sweep's worker
+#: (``training/sweep.py``'s ``run_stack``, which the driver's sweeps and the rule study's ran)
+#: imports, at the top of a module or inside a function, only modules of these layers and the
+#: package's ``__init__`` (which sets MKL's and OpenBLAS's kernels, and so training's bits), so the
+#: set is all of them: every .py file of the package's ``__init__``, ``io``, ``env``, ``rules``,
+#: ``agents`` and ``training`` (recording, rendering and the Gymnasium/PettingZoo views included,
+#: though training may not call them: too many files rather than too few). ``pretrained``,
+#: ``study`` and ``cli`` are not imported by training (the layers' rule, ``tests/test_layers.py``;
+#: the driver calls the sweep directly, not ``pursuit-bench sweep``).
+TRAINING_CODE_PATHS = (
+    "pursuit_bench/__init__.py",
+    "pursuit_bench/io/",
+    "pursuit_bench/env/",
+    "pursuit_bench/rules/",
+    "pursuit_bench/agents/",
+    "pursuit_bench/training/",
+)
+#: Left out: evaluation only. Of training, only a sweep's worker imports ``training/evaluate.py``
+#: (``run_stack``), and calls it only once every run of its stack is trained and checkpointed
+#: (``train_stack`` returns, then ``evaluate_folder``: the run's own evaluation, which this study
+#: does not read); ``train.py``, ``stack.py``, ``runs.py`` and the layers below do not import it.
+#: It is the one file of these layers changed since the rule study's build (commit 1ac828e: the
+#: evaluations with perturbed senses play the first episodes to start, each to its end).
+NOT_TRAINING = ("pursuit_bench/training/evaluate.py",)
+#: The fingerprint of the training code at the rule study's build (42 files), which the driver
+#: requires of the package it runs on. Recompute it from git (either line; the same number):
+#:   git ls-tree -r ec5779b -- pursuit_bench | PYTHONPATH=. python studies/residual-value/design.py
+#:   git ls-tree -r ec5779b -- pursuit_bench | awk '{print $3, $4}' \
+#:     | grep -E ' pursuit_bench/(__init__\.py|(io|env|rules|agents|training)/.*\.py)$' \
+#:     | grep -v ' pursuit_bench/training/evaluate\.py$' | sha256sum | cut -c1-16
+TRAINING_CODE = "4ebfb2467b9caa00"
 
 KINDS = ("hierarchical", "residual", "flat")
 #: The comparisons, first − second; one Holm family per budget over every (panel, comparison).
@@ -51,6 +87,24 @@ ANALYSIS_EPISODES, ANALYSIS_SEED = 200, 0
 #: A residual run's margin "differs" from the hierarchical one when its pool margin at the last
 #: budget (mean over its predators) is further than this from the hierarchical run of its seed's.
 DIFFERS = 0.05
+
+
+def training_files(listing: str) -> dict[str, str]:
+    """The training code's files in ``git ls-tree -r REV -- pursuit_bench``'s output: each path
+    (:data:`TRAINING_CODE_PATHS`, less :data:`NOT_TRAINING`) with its blob's hash."""
+    files = {}
+    for line in listing.splitlines():
+        about, path = line.split("\t", 1)
+        if path.endswith(".py") and path not in NOT_TRAINING and path.startswith(TRAINING_CODE_PATHS):
+            files[path] = about.split()[2]
+    return files
+
+
+def training_code(files: dict[str, str]) -> str:
+    """The fingerprint of :func:`training_files`: the first 16 hex digits of the SHA-256 of their
+    lines ``<blob> <path>``, by path."""
+    lines = "".join(f"{blob} {path}\n" for path, blob in sorted(files.items()))
+    return hashlib.sha256(lines.encode()).hexdigest()[:16]
 
 
 def condition_of(setting: str) -> str:
@@ -156,3 +210,6 @@ def plan() -> list[dict[str, Any]]:
 
 
 assert all(c in CONDITIONS for c, _ in SETTINGS.values())
+
+if __name__ == "__main__":
+    print(training_code(training_files(sys.stdin.read())))

@@ -11,9 +11,15 @@ results and only the 4 residual members are played here.
     kill -TERM "$(cat sweeps/residual-study/driver.pid)"                  # stop cleanly (exits 143)
     tail -f sweeps/residual-study/progress.log                            # progress
 
-It runs on the rule study's build only (``design.RULE_STUDY_CODE``, the package's tracked .py
-files): every run it trains or reuses is trained by that one build. Nothing it needs is in the
-package (the package is that build's, unchanged): the study's own logic is here and in design.py.
+It runs on one build of ``main`` (PLAN.md, "The build"), pinned at its first start in
+``build.json`` beside this file (the commit, the fingerprint of the package's tracked .py files as
+the rule study's driver computes it, and of the training code): it refuses any other package code
+from then on. The build's training code (``design.TRAINING_CODE``: the package's files that
+training reads, all but the evaluation) must be the rule study's, file for file, since the rule
+study's hierarchical and flat runs, trained by its build (commit ec5779b), are reused. Every
+evaluation made here is this build's, the ladders of the reused runs included; those taken from the
+rule study's results are its build's, which the replay check shows this build reproduces to the
+bit. The study's own logic is here and in design.py.
 """
 
 from __future__ import annotations
@@ -39,6 +45,7 @@ import design  # the study's fixed design, beside this file
 
 ROOT = Path(__file__).resolve().parents[2]
 WAITING = 3  # the exit status when only the rule study's runs are missing and --poll is 0
+PIN = Path(__file__).resolve().parent / "build.json"  # the study's build, once it started
 
 
 def log(work: Path, line: str) -> None:
@@ -48,34 +55,68 @@ def log(work: Path, line: str) -> None:
         file.write(stamped + "\n")
 
 
+def git(root: Path, *args: str) -> str:
+    return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True).stdout
+
+
 def build() -> dict[str, str]:
-    """The commit and the fingerprint of the package's tracked .py files, as the rule study's
-    driver computes them; refuses uncommitted package code, any code but the rule study's, and a
-    package imported from another checkout than this one (PYTHONPATH)."""
+    """This checkout's build (:func:`package_build`); refuses a package imported from another
+    checkout than this one (PYTHONPATH)."""
     import pursuit_bench
 
     if ROOT not in Path(pursuit_bench.__file__).resolve().parents:
         raise SystemExit(
             f"pursuit_bench is imported from {pursuit_bench.__file__}, not {ROOT}: export PYTHONPATH={ROOT}"
         )
-    dirty = subprocess.run(
-        ["git", "status", "--porcelain", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
-    ).stdout
+    return package_build(ROOT)
+
+
+def package_build(root: Path) -> dict[str, str]:
+    """The commit, the fingerprint of the package's tracked .py files (``code``, as the rule
+    study's driver computes it) and that of its training code (``training_code``,
+    :func:`design.training_code`) in the checkout ``root``. Refuses uncommitted package code and
+    training code other than the rule study's, naming the files that differ from its build's."""
+    dirty = git(root, "status", "--porcelain", "--", "pursuit_bench")
     changed = [line for line in dirty.splitlines() if line.endswith(".py")]
     if changed:
         raise SystemExit(f"the package has uncommitted code changes ({changed[0].strip()} …): commit them first")
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
-    listed = subprocess.run(
-        ["git", "ls-files", "-s", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
-    ).stdout
+    commit = git(root, "rev-parse", "HEAD").strip()
+    listed = git(root, "ls-files", "-s", "--", "pursuit_bench")
     code = hashlib.sha256("\n".join(x for x in listed.splitlines() if x.endswith(".py")).encode()).hexdigest()[:16]
-    if code != design.RULE_STUDY_CODE:
+    files = design.training_files(git(root, "ls-tree", "-r", "HEAD", "--", "pursuit_bench"))
+    training = design.training_code(files)
+    if training != design.TRAINING_CODE:
+        try:  # the rule study's build, from this project's history
+            theirs = design.training_files(git(ROOT, "ls-tree", "-r", design.RULE_STUDY_COMMIT, "--", "pursuit_bench"))
+            differ = ", ".join(sorted(p for p in files.keys() | theirs.keys() if files.get(p) != theirs.get(p)))
+        except subprocess.CalledProcessError:
+            differ = f"which files, unknown: commit {design.RULE_STUDY_COMMIT[:10]} is not in this clone"
         raise SystemExit(
-            f"the package's code ({code}, commit {commit.strip()[:10]}) is not the rule study's build "
-            f"({design.RULE_STUDY_CODE}, commit {design.RULE_STUDY_COMMIT[:10]}): run from a checkout of that "
-            "commit's package (PLAN.md, How to drive it)"
+            f"the package's training code ({training}, commit {commit[:10]}) is not the rule study's "
+            f"({design.TRAINING_CODE}, commit {design.RULE_STUDY_COMMIT[:10]}), whose runs are reused: {differ}"
         )
-    return {"commit": commit.strip(), "code": code}
+    return {"commit": commit, "code": code, "training_code": training}
+
+
+def pin(path: Path, current: dict[str, str], results: Path) -> None:
+    """The study's build, ``build.json``: written at the study's first start (commit it), then
+    required: SystemExit if the package's code is another (``current``: :func:`build`), or if the
+    file is gone while ``results`` holds the study's compact results (restore it from git)."""
+    from pursuit_bench.io.files import atomic_write_text
+
+    if path.exists():
+        pinned = json.loads(path.read_text())
+        if pinned["code"] != current["code"]:
+            raise SystemExit(
+                f"{path}: the study's build is commit {pinned['commit'][:10]} (package code {pinned['code']}); "
+                f"this package is commit {current['commit'][:10]} ({current['code']}): not mixed; run from a "
+                "checkout of the study's build (PLAN.md, How to drive it)"
+            )
+        return
+    if any((results / "runs").glob("*.json.gz")):
+        raise SystemExit(f"{path}: missing, though {results / 'runs'} holds the study's results: restore it from git")
+    stamp = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M:%S} UTC"
+    atomic_write_text(path, json.dumps({**current, "pinned": stamp}, indent=2) + "\n")
 
 
 def check_build(work: Path, current: dict[str, str]) -> None:
@@ -223,33 +264,17 @@ def population(args: Any, stop: list[bool], settings: list[str], current: dict[s
 # --- evaluation ---------------------------------------------------------------------------------
 
 
-def load_member(path: Path) -> Any:
-    """One member's prey from its safetensors file, greedy by default: ``rule_study.load_member``,
-    which sizes the observation without obstacles, but with the range readings where the member
-    trained with obstacles (as ``runs.described`` builds a run's agents)."""
-    from pursuit_bench import pretrained
-    from pursuit_bench.agents.kinds import LearningAgent
-    from pursuit_bench.env.task import obs_size
-    from pursuit_bench.training.train import TrainConfig, build_agents
-
-    weights, header = pretrained.read(path)
-    config = TrainConfig.from_dict(json.loads(header["training"]))
-    _, (agents,) = build_agents([config], [obs_size(config.task.n_agents, config.obstacles > 0)])
-    prey = agents[header["agent"]]
-    if not isinstance(prey, LearningAgent) or prey.kind != header.get("kind"):
-        raise ValueError(f"{path}: holds a {header.get('kind')} agent, not a learning prey")
-    prey.learner.load_member_weights(prey.member, weights)
-    return prey
-
-
 def play(
     folder: Path, where: Path, opponents: list[dict[str, Any]], budgets: list[int], episodes: int
 ) -> dict[str, Any]:
     """A run's predators at each budget against each opponent (a member of the population in
     ``where``), by the CRN protocol: the same calls as the rule study's ``evaluate_run`` (whose
-    population is fixed to the rule study's nine), so a member's evaluation is the same here and there."""
+    population is fixed to the rule study's nine), so a member's evaluation is the same here and
+    there. A member is loaded by ``rule_study.load_member``, with its range readings where it
+    trained among obstacles (this driver loaded them itself while the package's did not)."""
     from pursuit_bench.agents.kinds import ScriptedAgent
     from pursuit_bench.rules.policies import FleeingPrey
+    from pursuit_bench.study.rule_study import load_member
     from pursuit_bench.training import runs
     from pursuit_bench.training.evaluate import evaluate_agents
 
@@ -551,7 +576,11 @@ def main() -> int:
         print(f"--episodes {args.episodes}: the study's last budget is {last}", file=sys.stderr)
         return 2
     args.work.mkdir(parents=True, exist_ok=True)
-    current = {"commit": "test", "code": "test"} if args.skip_build_check else build()
+    if args.skip_build_check:
+        current = {"commit": "test", "code": "test", "training_code": "test"}
+    else:
+        current = build()
+        pin(PIN, current, args.results)
     check_build(args.work, current)
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
     stop = [False]
@@ -577,7 +606,11 @@ def main() -> int:
             "command": "python studies/residual-value/run.py " + " ".join(sys.argv[1:]),
         }
         marker.write_text(json.dumps(about, indent=2) + "\n")
-    log(args.work, f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}")
+    log(
+        args.work,
+        f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}, "
+        f"training code {current['training_code']}",
+    )
     while True:
         waiting = population(args, stop, settings, current)
         states = (
