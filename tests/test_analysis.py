@@ -41,6 +41,7 @@ def test_analyze_a_run_writes_four_files_that_agree_with_its_states(tmp_path: Pa
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_the_organisation_score_sees_structure_and_not_its_absence() -> None:
     rng = np.random.default_rng(0)
     distance = rng.uniform(0.1, 2.0, 600)

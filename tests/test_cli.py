@@ -216,6 +216,7 @@ def test_ctrl_c_stops_cleanly_with_a_checkpoint_and_a_valid_recording(tmp_path: 
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_training_log_line_has_an_eta(tmp_path: Path) -> None:
     command = cli_command("train", "--condition", "1p-low", "--out", str(tmp_path / "r"), *TINY, "--no-record")
     done = subprocess.run([*command, "--log-every", "4"], capture_output=True, text=True, timeout=300)

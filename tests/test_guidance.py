@@ -258,6 +258,7 @@ def test_degenerate_input_is_refused_with_a_reason() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_the_law_command_on_a_run_and_on_a_sweep(tmp_path: Path) -> None:
     sweep = tmp_path / "s"
     code, output = run_cli(

@@ -106,6 +106,7 @@ def test_the_wheel_holds_the_licence_and_says_mit(wheel: Path) -> None:
     assert {"train", "ray", "test", "docs"} <= set(metadata.get_all("Provides-Extra"))
     plain = [r for r in metadata.get_all("Requires-Dist") if "extra ==" not in r]
     assert sorted(r.split(">")[0].split("<")[0] for r in plain) == [
+        "click",
         "gymnasium",
         "numba",
         "numpy",

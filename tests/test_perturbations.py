@@ -212,6 +212,7 @@ def test_held_out_opponents_play_the_other_runs_prey(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_robust_on_the_shipped_agents_writes_its_files(tmp_path: Path) -> None:
     out = tmp_path / "robust"
     command = cli_command("robust", "--pretrained", "1p-high", "--episodes", "4", "--workers", "2", "--out", str(out))

@@ -103,6 +103,7 @@ def test_the_pool_never_holds_a_prey_that_trained_with_a_judged_predator() -> No
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_pool_on_a_tiny_sweep_judges_both_kinds_against_the_same_opponents(tmp_path: Path) -> None:
     sweep, out = tmp_path / "sweep", tmp_path / "pool"
     code, output = run_cli(

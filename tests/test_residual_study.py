@@ -142,6 +142,7 @@ def _tiny_rule_study(tmp: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_tiny_run_of_the_driver_reuses_the_rule_study_s_runs(tmp_path: Path) -> None:
     import shutil
 
@@ -314,6 +315,7 @@ def test_the_pinned_build_is_refused_once_the_package_changes(tmp_path: Path) ->
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_tiny_run_of_an_obstacle_setting_trains_its_own_population_and_all_three_kinds(tmp_path: Path) -> None:
     """An obstacle setting needs nothing of the rule study: its 12 learned members and the judged
     runs of all three kinds are trained here with the obstacles; a SIGTERM stops the driver

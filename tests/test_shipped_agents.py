@@ -37,6 +37,7 @@ def test_every_condition_is_shipped_small_and_acts() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_non_editable_install_carries_the_weights(tmp_path: Path) -> None:
     """Build the wheel, install it (not editable) into a folder of its own and load from there."""
     repo = Path(__file__).resolve().parents[1]

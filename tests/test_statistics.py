@@ -191,6 +191,7 @@ def test_the_median_interval_against_the_exact_bootstrap_distribution() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_statistics_md_prints_what_its_script_gives() -> None:
     """docs/statistics.md's coverage table and skewness figures are what
     scripts/interval_coverage.py computes (seeded: the same every time)."""

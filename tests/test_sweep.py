@@ -24,6 +24,7 @@ def episodes_of(folder: Path) -> list[int]:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alone(tmp_path: Path) -> None:
     out = tmp_path / "sweep"
     code, output = run_cli(*SWEEP, "--out", str(out))
@@ -98,6 +99,7 @@ def test_a_small_sweep_leaves_evaluated_run_folders_that_match_runs_trained_alon
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_a_killed_sweep_finishes_on_rerun_with_nothing_trained_twice(tmp_path: Path, processes) -> None:
     out = tmp_path / "sweep"
     command = [sys.executable, "-m", "pursuit_bench.cli.main", *SWEEP, "--episodes", "120", "--out", str(out)]
