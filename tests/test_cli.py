@@ -176,6 +176,7 @@ def test_bad_run_folders(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_killed_training_resumes_to_the_same_episode_count(tmp_path: Path, processes) -> None:
     out = tmp_path / "run"
     args = ["train", "--condition", "1p-low", "--out", str(out), "--episodes", "400", "--num-envs", "4"]

@@ -12,6 +12,7 @@ MARGIN = 0.2
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_the_prey_learns_to_survive_a_fixed_stalker(one_thread) -> None:
     config = TrainConfig(
         condition="1p-high",
