@@ -46,6 +46,8 @@ CHROMIUM = site_check.find_chromium()
 NO_BROWSER = site_check.missing()
 needs_chromium = pytest.mark.skipif(NO_BROWSER is not None, reason=f"no browser checks: {NO_BROWSER}")
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
+#: Tutorials whose run takes a minute or more on CI's two cores (Ray's cluster, SB3's training): marked long.
+LONG_TUTORIALS = {"ray-sweep", "sb3"}
 #: Each Python or bash block of a tutorial may take this long (a training run, a Ray sweep).
 BLOCK_TIMEOUT = 600
 
@@ -395,7 +397,9 @@ def test_a_tutorial_s_consecutive_python_blocks_share_an_interpreter_and_nothing
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("page", TUTORIALS, ids=[p.stem for p in TUTORIALS])
+@pytest.mark.parametrize(
+    "page", [pytest.param(p, id=p.stem, marks=pytest.mark.long if p.stem in LONG_TUTORIALS else ()) for p in TUTORIALS]
+)
 def test_the_tutorial_runs_as_written(
     page: Path, tmp_path: Path, run_block: Callable[..., subprocess.CompletedProcess[str]]
 ) -> None:

@@ -154,6 +154,7 @@ def test_pool_on_a_tiny_sweep_judges_both_kinds_against_the_same_opponents(tmp_p
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_pool_on_a_tiny_sweep_of_three_kinds_compares_them_pairwise(tmp_path: Path) -> None:
     sweep, out = tmp_path / "sweep", tmp_path / "pool"
     code, output = run_cli(
