@@ -46,7 +46,7 @@ CHROMIUM = site_check.find_chromium()
 NO_BROWSER = site_check.missing()
 needs_chromium = pytest.mark.skipif(NO_BROWSER is not None, reason=f"no browser checks: {NO_BROWSER}")
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
-#: Tutorials whose run takes a minute or more on CI's two cores (Ray's cluster, SB3's training): marked long.
+#: The longest tutorials to run (Ray's cluster, SB3's training): marked long.
 LONG_TUTORIALS = {"ray-sweep", "sb3"}
 #: Each Python or bash block of a tutorial may take this long (a training run, a Ray sweep).
 BLOCK_TIMEOUT = 600

@@ -41,7 +41,7 @@ except ImportError:
 NAMESPACE = _namespace_command()
 
 pytestmark = [
-    pytest.mark.long,  # Ray starts its cluster for each: a minute or more on CI's two cores
+    pytest.mark.long,  # Ray starts its cluster for each: among the suite's longest
     pytest.mark.skipif(not HAVE_RAY, reason="Ray is not installed (pip install 'pursuit-bench[ray]')"),
     pytest.mark.skipif(NAMESPACE is None, reason="no network namespace allowed here (unshare -n and -rn refused)"),
 ]
