@@ -23,15 +23,16 @@ ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "studies" / "residual-value"
 
 
-def _design() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("residual_design", STUDY / "design.py")
+def _study_module(name: str) -> ModuleType:
+    """studies/residual-value/NAME.py, loaded as a module (the study's scripts are not a package)."""
+    spec = importlib.util.spec_from_file_location(f"residual_{name}", STUDY / f"{name}.py")
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
 
 
-design = _design()
+design = _study_module("design")
 
 
 def test_the_population_is_disjoint_from_the_judged_runs_and_holds_no_twins() -> None:
@@ -260,16 +261,8 @@ def _commit(root: Path, path: str, line: str) -> None:
     _git(root, "commit", "-q", "-m", f"changed {path}")
 
 
-def _run_module() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("residual_run", STUDY / "run.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_a_package_whose_training_code_is_not_the_rule_study_s_is_refused_naming_the_files(tmp_path: Path) -> None:
-    run = _run_module()
+    run = _study_module("run")
     root = _checkout(tmp_path)
     first = run.package_build(root)
     assert first["training_code"] == design.TRAINING_CODE
@@ -292,7 +285,7 @@ def test_the_pinned_build_is_refused_once_the_package_changes(tmp_path: Path) ->
     """The first start writes build.json; a later start with other package code (the training
     code still the rule study's) is refused, the same code goes on; a lost build.json is not
     written again over the study's results."""
-    run = _run_module()
+    run = _study_module("run")
     root = _checkout(tmp_path)
     pinned, results = tmp_path / "build.json", tmp_path / "results"
     started = run.package_build(root)
