@@ -580,7 +580,8 @@ def main() -> int:
         current = {"commit": "test", "code": "test", "training_code": "test"}
     else:
         current = build()
-        pin(PIN, current, args.results)
+        if args.preset == "reproduction" and args.budgets is None:  # the study itself, not a try-out
+            pin(PIN, current, args.results)
     check_build(args.work, current)
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
     stop = [False]
