@@ -7,18 +7,22 @@ evaluating shipped weights repeats on any machine. The short training run's figu
 (``runs/demo/eval.json``) repeat bit for bit on one machine but not across machines, so the
 README gives them as the spread over seeds 0–4 measured here (``results/readme/main-job.json``,
 written by ``--record-seeds``), and this script checks that the README quotes that spread and
-that the main job's seed-0 figures lie inside it. The README's answer (its table and the
-sentences that quote its counts) is recomputed from the committed results (``results/pool/``,
-``results/reproduction/``). Exits 1 naming any sentence the README lacks.
+that the main job's seed-0 figures lie inside it. The README's answer (the block between its
+``answer:begin`` and ``answer:end`` markers: the sentences that quote the counts, and the table)
+is recomputed from the committed results (``results/rule-study/``, ``results/reproduction/``).
+Exits 1 naming any sentence the README lacks.
 
     python scripts/check_readme.py --record-seeds MAINJOB/seed*   # run folders of seeds 0-4
+    python scripts/check_readme.py --write-answer                 # rewrite the answer block
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import sys
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -68,50 +72,71 @@ def outside(trained: dict[str, Any], seeds: dict[str, Any]) -> list[str]:
     return out
 
 
-#: The answer's table: its rows' labels, and what each row counts (``pool.summarise``'s panels at
+#: The answer's table: its rows' labels, and what each row counts (the rule study's summary at
 #: the last budget, or the reproduction's verdicts against the fixed modes).
 ANSWER_ROWS = (
-    ("hierarchical − flat: return against the pool at {last:,} episodes (**primary**)", "return"),
-    ("hierarchical − flat: margin over the fixed modes at {last:,} episodes", "margin"),
-    ("hierarchical − flat: margin averaged over {first}–{last:,} episodes (head start)", "learning_speed"),
-    ("learned stalk/chase switch − better fixed mode at {last:,} episodes (both steer by the rule)", "fixed_modes"),
+    ("hierarchical − flat: return against the population at {last:,} episodes (**primary**)", "primary"),
+    ("hierarchical − flat: margin over the fixed modes at {last:,} episodes (secondary)", "margin"),
+    ("hierarchical − flat: return averaged over {first}–{last:,} episodes (head start, secondary)", "head_start"),
+    (
+        "learned stalk/chase switch − better fixed mode, own prey, {last:,} episodes (the paper's comparison: "
+        "both steer by the rule; earlier evaluation)",
+        "fixed_modes",
+    ),
 )
-POOL = ROOT / "results" / "pool" / "pool.json"
+RULE_STUDY = ROOT / "results" / "rule-study"
 REPRODUCTION = ROOT / "results" / "reproduction"
+BEGIN = "<!-- answer:begin: scripts/check_readme.py --write-answer writes this block -->"
+END = "<!-- answer:end -->"
+
+
+STUDY_BEGIN = "<!-- rule-study:begin: scripts/check_readme.py --write-answer writes this block -->"
+STUDY_END = "<!-- rule-study:end -->"
+
+
+@functools.cache
+def rule_study_summary() -> dict[str, Any]:
+    """The rule study's report (``rule_report.summarise``) of the committed results, its seed rule
+    applied: a condition whose runs the rule still asks for is left out."""
+    from pursuit_bench.study import rule_report, rule_study
+
+    about = json.loads((RULE_STUDY / "rule-study.json").read_text())
+    runs = rule_study.read_runs(RULE_STUDY / "runs")
+    return rule_report.summarise(runs, seed_rule=rule_report.seed_rule_of(about))
 
 
 def answer() -> dict[str, Any]:
     """The counts the README's answer quotes, from the committed results: per row of its table
-    (panels, rule ahead, equivalent, not resolved, rule behind), the panels the pool did not
-    compare, and 1p-high's runs that fall below the better fixed mode (pool margin < 0) or
-    above every run of the other kind."""
-    from pursuit_bench.study import pool, report
+    (panels, rule ahead, equivalent, not resolved, rule behind), the panels judged and the
+    conditions still running (the rule study's seed rule applied), and per kind the panels where
+    its runs fail significantly more often (reliability, Holm)."""
+    from pursuit_bench.env.conditions import CONDITIONS
+    from pursuit_bench.study import report
 
-    summary = pool.summarise(pool.load(POOL))
-    last = summary["budgets"][-1]
+    summary = rule_study_summary()
     rows: dict[str, tuple[int, ...]] = {}
-    for _, key in ANSWER_ROWS[:3]:
-        counts = summary["learning_speed"]["counts"] if key == "learning_speed" else last[key]["counts"]
-        rows[key] = (sum(counts.values()), *(counts[v] for v in ("rule helps", "equivalent", "not resolved")))
-        rows[key] += (counts["flat better"],)
+    for key in ("primary", "margin", "head_start"):
+        counts = (summary if key == "primary" else summary["secondary"])[key]["counts"]
+        order = ("rule helps", "equivalent", "not resolved", "flat better")
+        rows[key] = (sum(counts.values()), *(counts[v] for v in order))
     table = report.panel_table(report.collect(REPRODUCTION))
     report.judge(table)
     verdicts = [t["verdict"] for t in table if "verdict" in t]
     order = ("better", "equivalent", "not resolved", "worse")
     rows["fixed_modes"] = (len(verdicts), *(verdicts.count(v) for v in order))
-    panel = next(p for p in last["margin"]["panels"] if p["condition"] == "1p-high")
+    judged = {r["condition"] for r in summary["primary"]["panels"]}
+    more: dict[str, list[str]] = {"flat": [], "hierarchical": []}
+    for r in summary["secondary"]["reliability"]:
+        if r["difference"]["p_holm"] <= 0.05:  # the difference is hierarchical's share − flat's
+            more["hierarchical" if r["difference"]["difference"] > 0 else "flat"].append(r["condition"])
     return {
         "rows": rows,
-        "budgets": {"first": summary["budgets"][0]["episodes"], "last": last["episodes"]},
-        "panels": len(verdicts),
-        "split": {
-            kind: {
-                "runs": len(panel[kind]),
-                "below": sum(v < 0 for v in panel[kind]),
-                "above": sum(v > max(panel[other]) for v in panel[kind]),
-            }
-            for kind, other in (("hierarchical", "flat"), ("flat", "hierarchical"))
-        },
+        "budgets": {"first": summary["budgets"][0], "last": summary["budgets"][-1]},
+        "all_panels": sum(c.n_predators for c in CONDITIONS.values()),
+        "running": [c for c in CONDITIONS if c not in judged],
+        "running_panels": sum(CONDITIONS[c].n_predators for c in CONDITIONS if c not in judged),
+        "fail_more": more,
+        "failure_margin": summary["failure_margin"],
     }
 
 
@@ -129,18 +154,69 @@ def answer_table(counts: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _conditions(panels: list[str]) -> str:
+    """``3 panels (3p-low-shared, 3p-low-individual)``, or ``none``."""
+    if not panels:
+        return "none"
+    names = list(dict.fromkeys(panels))
+    return f"{len(panels)} panel{'s' if len(panels) > 1 else ''} ({', '.join(names)})"
+
+
 def answer_sentences(counts: dict[str, Any]) -> list[str]:
-    """The README's sentences that quote the answer's counts."""
-    ret, speed, flat = counts["rows"]["return"], counts["rows"]["learning_speed"], counts["split"]["flat"]
-    hierarchical = counts["split"]["hierarchical"]
-    return [
-        f"the rule helps in {ret[1]} of the {ret[0]} panels compared so far and the flat learner in {ret[4]}; "
-        f"{ret[3]} are not resolved, and {counts['panels'] - ret[0]} panels",
-        f"ahead in {speed[1]} of the {speed[0]} panels and behind in {'none' if speed[4] == 0 else speed[4]}",
-        f"in 1p-high, {flat['below']} of its {flat['runs']} runs fall below the better fixed mode ("
-        + ("no hierarchical run does" if hierarchical["below"] == 0 else f"{hierarchical['below']} hierarchical do")
-        + f") and {flat['above']} beat every hierarchical run",
+    """The README's sentences that quote the answer's counts (the bold one first)."""
+    primary, head = counts["rows"]["primary"], counts["rows"]["head_start"]
+    judged = primary[0]
+    so_far = "" if not counts["running"] else " so far"
+    behind = "none" if head[4] == 0 else str(head[4])
+    sentences = [
+        f"**On the primary measure, fixed before the runs, the rule helps in {primary[1]} of the {judged} "
+        f"panels judged{so_far}, the flat learner is better in {primary[4]}, {primary[2]} are equivalent "
+        f"within ±0.05 and {primary[3]} are not resolved.**",
+        f"The rule's clearest effect is a head start: averaged over {counts['budgets']['first']}–"
+        f"{counts['budgets']['last']:,} episodes, the return is higher with the rule in {head[1]} of the "
+        f"{judged} panels and lower in {behind}.",
+        f"Reliability is a result of its own: the flat learner's runs fail significantly more often in "
+        f"{_conditions(counts['fail_more']['flat'])}, the hierarchical predator's in "
+        f"{_conditions(counts['fail_more']['hierarchical'])} (a run fails when it ends more than "
+        f"{abs(counts['failure_margin']):.2f} below the better fixed mode put in its place; Holm).",
     ]
+    if counts["running"]:
+        sentences.insert(
+            1,
+            f"Not judged yet (runs in training): {', '.join(counts['running'])} ({counts['running_panels']} of the "
+            f"{counts['all_panels']} panels); until they are in, Holm runs over the {judged} panels judged.",
+        )
+    return sentences
+
+
+def answer_block(counts: dict[str, Any]) -> str:
+    """The README's generated block: the sentences, then the table, between the markers."""
+    paragraph = textwrap.fill(" ".join(answer_sentences(counts)), 100, break_long_words=False, break_on_hyphens=False)
+    return "\n".join([BEGIN, paragraph, "", answer_table(counts), END])
+
+
+def study_block(counts: dict[str, Any]) -> str:
+    """REPRODUCTION.md's generated block of the rule study: the README's sentences, then the
+    study's report (``pursuit-bench report results/rule-study``'s rule-study.md), its headings one
+    level down."""
+    from pursuit_bench.study import rule_report
+
+    paragraph = textwrap.fill(" ".join(answer_sentences(counts)), 100, break_long_words=False, break_on_hyphens=False)
+    tables = ("\n" + rule_report.markdown(rule_study_summary())).replace("\n## ", "\n### ").strip()
+    return "\n".join([STUDY_BEGIN, paragraph, "", tables, STUDY_END])
+
+
+def _replace_block(path: Path, begin: str, end: str, block: str) -> None:
+    text = path.read_text()
+    before, rest = text.split(begin, 1)
+    path.write_text(before + block + rest.split(end, 1)[1])
+
+
+def write_answer() -> None:
+    """Rewrite the README's answer block and REPRODUCTION.md's rule-study block from the results."""
+    counts = answer()
+    _replace_block(ROOT / "README.md", BEGIN, END, answer_block(counts))
+    _replace_block(ROOT / "REPRODUCTION.md", STUDY_BEGIN, STUDY_END, study_block(counts))
 
 
 def readme() -> str:
@@ -166,7 +242,11 @@ def record_seeds(folders: list[Path]) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-seeds", type=Path, nargs="+", default=None, help="Run folders of seeds 0–4.")
+    parser.add_argument("--write-answer", action="store_true", help="Rewrite the README's answer block.")
     args = parser.parse_args()
+    if args.write_answer:
+        write_answer()
+        return 0
     if args.record_seeds:
         record_seeds(args.record_seeds)
         return 0
@@ -175,10 +255,10 @@ def main() -> int:
     trained = json.loads((ROOT / "runs/demo/eval.json").read_text())["panels"][0]
     text = readme()
     counts = answer()
-    quoted = (shipped_sentence(shipped), spread_sentence(seeds), *answer_sentences(counts))
+    quoted = (shipped_sentence(shipped), spread_sentence(seeds))
     problems = [f"README.md lacks: {s!r}" for s in quoted if s not in text]
-    if answer_table(counts) not in (ROOT / "README.md").read_text():
-        problems.append(f"README.md lacks the answer's table:\n{answer_table(counts)}")
+    if answer_block(counts) not in (ROOT / "README.md").read_text():
+        problems.append(f"README.md's answer is not what the results give (--write-answer):\n{answer_block(counts)}")
     problems += [f"runs/demo/eval.json: {line}" for line in outside(trained, seeds)]
     for problem in problems:
         print(problem, file=sys.stderr)

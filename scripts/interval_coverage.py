@@ -60,7 +60,7 @@ def median_coverage(sigma: float, n: int, draws: int = 1000) -> float:
     return held / draws
 
 
-#: Runs a kind in the pool study (REPRODUCTION.md, "Does the rule help?"): hierarchical and flat.
+#: Runs a kind in the pool study (REPRODUCTION.md, "The pool study"): hierarchical and flat.
 POOL_RUNS = 8
 #: (label, draw of the hierarchical runs, draw of the flat runs, true difference)
 WELCH_CASES = (

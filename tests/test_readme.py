@@ -1,6 +1,7 @@
 """scripts/check_readme.py on a fast path: the shipped agents' figures evaluated afresh (seconds)
 and the training run's spread over seeds from its committed source file."""
 
+import gzip
 import json
 import re
 import subprocess
@@ -8,8 +9,10 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 from cli_helpers import run_cli
+from scipy import stats
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
 import check_readme
@@ -36,16 +39,43 @@ def test_the_readme_quotes_the_training_runs_spread_over_seeds() -> None:
 
 
 def test_the_readme_s_answer_is_what_the_committed_results_give() -> None:
-    """The answer's table and the sentences quoting its counts, recomputed from results/pool/ and
-    results/reproduction/; the README gives it before the env's use, in at most 150 lines."""
+    """The answer's sentences and table, recomputed from results/rule-study/ (its seed rule
+    applied) and results/reproduction/; the README gives it before the env's use, in at most 150
+    lines. The counts are checked against the study's per-panel verdicts counted here."""
     counts = check_readme.answer()
     text = check_readme.ROOT.joinpath("README.md").read_text()
-    assert check_readme.answer_table(counts) in text
-    words = check_readme.readme()
-    for sentence in check_readme.answer_sentences(counts):
-        assert sentence in words
+    assert check_readme.answer_block(counts) in text
+    assert check_readme.study_block(counts) in (check_readme.ROOT / "REPRODUCTION.md").read_text()
     assert text.index("## What the project found") < text.index("## Use the env") and len(text.splitlines()) <= 150
     assert "[REPRODUCTION.md](REPRODUCTION.md)" in text
+    primary = counts["rows"]["primary"]
+    assert primary[0] == sum(primary[1:]) == counts["all_panels"] - counts["running_panels"]
+    assert (primary[1], primary[4]) == _significant_by_hand(counts["running"])
+
+
+def _significant_by_hand(running: list[str]) -> tuple[int, int]:
+    """The primary verdicts' "rule helps" and "flat better" counts from the committed per-run
+    values by a formula written here (scipy's Welch test, Holm's steps), not the study's code: a
+    run's pool return is its trained return averaged over the population's members at 15,000
+    episodes; the conditions still running are left out."""
+    returns: dict[tuple[str, str], dict[str, list[float]]] = {}
+    for path in sorted((check_readme.RULE_STUDY / "runs").glob("*.json.gz")):
+        run = json.loads(gzip.decompress(path.read_bytes()))
+        if run["condition"] in running:
+            continue
+        members = run["pool"]["15000"]
+        for predator in members["FleeingPrey"]["panels"]:
+            value = float(np.mean([m["panels"][predator][0] for m in members.values()]))
+            returns.setdefault((run["condition"], predator), {}).setdefault(run["kind"], []).append(value)
+    tests = [stats.ttest_ind(k["hierarchical"], k["flat"], equal_var=False) for k in returns.values()]
+    p = np.array([t.pvalue for t in tests])
+    adjusted, running_max = np.empty_like(p), 0.0
+    for rank, i in enumerate(np.argsort(p)):
+        running_max = max(running_max, min(1.0, (len(p) - rank) * p[i]))
+        adjusted[i] = running_max
+    helps = sum(a <= 0.05 and t.statistic > 0 for a, t in zip(adjusted, tests, strict=True))
+    behind = sum(a <= 0.05 and t.statistic < 0 for a, t in zip(adjusted, tests, strict=True))
+    return int(helps), int(behind)
 
 
 def test_the_readme_keeps_none_of_the_sentences_an_audit_found_wrong() -> None:
@@ -86,3 +116,14 @@ def test_every_python_block_of_the_readme_and_of_use_md_runs_as_written(tmp_path
         script = "\n\n".join(blocks)
         done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True)
         assert done.returncode == 0, f"{script}\n{done.stderr}"
+
+
+@pytest.mark.long
+def test_the_rule_study_s_committed_report_regenerates_byte_for_byte(tmp_path: Path) -> None:
+    """docs/figures/rule-study/ (REPRODUCTION.md's figure, and the report its block quotes) is what
+    `pursuit-bench report results/rule-study` writes from the committed results."""
+    code, output = run_cli("report", str(check_readme.RULE_STUDY), "--out", str(tmp_path))
+    assert code == 0, output
+    committed = check_readme.ROOT / "docs" / "figures" / "rule-study"
+    for name in ("rule-study-report.json", "rule-study.md", "rule-study.png"):
+        assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name

@@ -97,6 +97,26 @@ def test_a_condition_whose_runs_are_not_all_in_is_left_out_and_named() -> None:
         rule_report.summarise([r for r in runs if r["kind"] == "hierarchical"])
 
 
+def test_a_condition_the_seed_rule_asks_more_seeds_of_is_left_out_and_named() -> None:
+    """Both kinds hold 12 seeds everywhere, but 1p-high has a failed run among its first 10: the
+    study's seed rule (10, then 10 more where a run failed, up to 30) asks for 20 there, so 1p-high
+    is in progress and only 2p-low-shared is judged; without the rule both are."""
+    runs = synthetic_runs()
+    rule = rule_report.seed_rule_of({"format": "x", "seed_rule": {"first": 10, "step": 10, "most": 30}})
+    assert rule is not None
+    summary = rule_report.summarise(runs, seed_rule=rule)
+    assert summary["in_progress"] == {"1p-high": {"hierarchical": 12, "flat": 12, "wanted": 20}}
+    assert {r["condition"] for r in summary["primary"]["panels"]} == {"2p-low-shared"}
+    assert "1p-high (12 hierarchical, 12 flat, of the 20 a kind the seed rule asks for)" in rule_report.markdown(
+        summary
+    )
+    assert "in_progress" not in rule_report.summarise(runs)
+    assert rule_report.seed_rule_of({"format": "x"}) is None
+    for bad in ({"first": 10, "step": 10}, {"first": 0, "step": 10, "most": 30}, [10, 10, 30]):
+        with pytest.raises(ValueError, match="seed_rule"):
+            rule_report.seed_rule_of({"seed_rule": bad})
+
+
 def test_a_member_that_decides_a_verdict_shows_in_the_leave_one_out_range() -> None:
     runs = synthetic_runs()
     for r in runs:  # against one member only, the hierarchical runs of 2p-low-shared predator_0 fall behind
@@ -164,6 +184,10 @@ def test_the_report_command_regenerates_byte_for_byte(tmp_path: Path) -> None:
     assert code == 0, output
     for name, data in first.items():
         assert (tmp_path / "again" / name).read_bytes() == data, name
+    (where / "rule-study.json").write_text('{"seed_rule": {"first": 10}}\n')
+    code, output = run_cli("report", str(where))
+    assert code == 2 and "rule-study.json: expected" in output and "Traceback" not in output, output
+    (where / "rule-study.json").write_text("{}\n")
     (where / "runs" / "broken.json.gz").write_bytes(b"")
     code, output = run_cli("report", str(where))
     assert code != 0

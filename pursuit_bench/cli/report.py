@@ -82,15 +82,17 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
     from pursuit_bench.study import rule_report
 
     kinds, pairs, differs = rule_report.KINDS, rule_report.PAIRS, rule_report.statistics.EQUIVALENCE_MARGIN
-    if stem != "rule-study":
-        try:
-            about = json.loads((where / f"{stem}.json").read_text())
+    marker = where / f"{stem}.json"
+    try:
+        about = json.loads(marker.read_text())
+        seed_rule = rule_report.seed_rule_of(about)
+        if stem != "rule-study":
             kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
             differs = float(about.get("differs", differs))
-        except (ValueError, KeyError, TypeError) as error:
-            raise BadInput(f"{where / (stem + '.json')}: expected kinds and comparisons ({error})") from None
+    except (ValueError, KeyError, TypeError, AttributeError) as error:
+        raise BadInput(f"{marker}: expected kinds and comparisons, and a seed rule if any ({error})") from None
     try:
-        summary = rule_report.write_report(where, out, stem, kinds, pairs, differs)
+        summary = rule_report.write_report(where, out, stem, kinds, pairs, differs, seed_rule)
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")

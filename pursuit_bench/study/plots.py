@@ -605,7 +605,9 @@ def robust_png(result: dict[str, Any]) -> bytes:
 def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     """Learning against budget against one pool of opponents: per condition, each kind's pool
     margin (or the ``measure`` the curves hold: "pool return" for the rule study) (mean over
-    predators) at every kept budget, mean over runs with its t-interval."""
+    predators) at every kept budget, mean over runs with its t-interval. Optional in ``summary``:
+    ``runs_label`` (the runs a kind, said in the subtitle), ``opponents`` (whom they played) and
+    ``titles`` (a panel's title by condition, else the condition)."""
     curves = summary["curves"]
     conditions = list(curves)
     columns = 5
@@ -628,16 +630,17 @@ def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
         ax.set_xticks(x, ["" if c else f"{e / 1000:g}k" for e, c in zip(x, close, strict=True)], fontsize=7)
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.tick_params(axis="y", labelsize=7)
-        ax.set_title(conditions[i], fontsize=9)
+        ax.set_title(summary.get("titles", {}).get(conditions[i], conditions[i]), fontsize=9)
         if i % columns == 0:
             ax.set_ylabel(measure, fontsize=8)
     axes.flat[0].legend(fontsize=7, loc="best")
-    seeds = {k: len(v) for k, v in summary["seeds"].items()}
+    seeds = summary.get("runs_label") or ", ".join(f"{len(v)} {k}" for k, v in summary["seeds"].items())
     budgets = [b["episodes"] for b in summary["budgets"]]
     fig.suptitle(
         ("Margin over the better fixed mode" if measure == "pool margin" else measure.capitalize())
-        + " against one pool of opponents, by training episodes: mean over the condition's predators\n"
-        f"mean over runs ({', '.join(f'{n} {k}' for k, n in seeds.items())}), band: 95 % t-interval; "
+        + f" against {summary.get('opponents', 'one pool of opponents')}, by training episodes: mean over the "
+        "condition's predators\n"
+        f"mean over runs ({seeds}), band: 95 % t-interval; "
         f"tick marks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)}), labelled where they fit",
         fontsize=10,
     )

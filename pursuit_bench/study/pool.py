@@ -16,7 +16,7 @@ A run's **pool return** for a predator is its mean return over the pool's member
 its **pool margin** is that minus the better of always-chase's and always-stalk's pool returns.
 Hierarchical minus flat, per panel and budget: Welch's interval over runs (the two kinds' runs
 are independent), Holm over the panels of a budget, and two one-sided tests for equivalence
-within :data:`EQUIVALENCE_MARGIN` (Holm too). Learning speed: each run's pool margin averaged over
+within :data:`EQUIVALENCE_MARGIN` (Holm too). The head start: each run's pool margin averaged over
 the budgets (the area under its curve on a log-episode axis, over its span), compared alike. Cross-kind play:
 each judged run's predators against its own prey and against the prey of the other kind's run of
 the same seed, at the end of training.
@@ -330,7 +330,7 @@ def compare(
 def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dict[str, Any]:
     """Everything the docs quote from a compact pool result: per budget and panel each kind's
     pool margin and return over runs, hierarchical minus flat with its verdict (Holm over the
-    budget's panels); the probability of improvement at the last budget; learning speed; the
+    budget's panels); the probability of improvement at the last budget; the head start; the
     cross-kind play per condition."""
     budgets = [str(b) for b in result["budgets"]]
     panels = _panels(result)
@@ -535,7 +535,7 @@ def panels_markdown(rows: list[dict[str, Any]], what: str) -> str:
 
 def counts_markdown(summary: dict[str, Any]) -> str:
     """The verdict counts at every budget, on the pool margin and on the pool return, and for
-    learning speed."""
+    the head start."""
     verdicts = list(summary["budgets"][-1]["return"]["counts"])
     lines = [
         "| budget (episodes) | measure | " + " | ".join(verdicts) + " |",
@@ -616,7 +616,7 @@ def markdown(summary: dict[str, Any]) -> str:
             "## Probability of improvement",
             "",
             improvement_markdown(summary),
-            "## Learning speed: the pool margin averaged over the budgets (log-episode axis)",
+            "## Head start: the pool margin averaged over the budgets (log-episode axis)",
             "",
             panels_markdown(summary["learning_speed"]["panels"], "mean pool margin"),
             "## Cross-kind play at the end of training",

@@ -215,17 +215,45 @@ def curves(runs: list[dict[str, Any]], keys: list[str], kinds: tuple[str, ...] =
     return out
 
 
+SeedRule = Callable[[list[dict[str, Any]]], int]
+"""A study's seed rule: from one setting's judged runs so far, how many a kind it asks for."""
+
+
+def seed_rule_of(about: dict[str, Any]) -> SeedRule | None:
+    """The seed rule a study's marker file (``rule-study.json``) records, ``{"first", "step",
+    "most"}`` (:func:`rule_study.seeds_wanted`), or None where it records none; ValueError for
+    another form."""
+    if "seed_rule" not in about:
+        return None
+    rule = about["seed_rule"]
+    if (
+        not isinstance(rule, dict)
+        or sorted(rule) != ["first", "most", "step"]
+        or not all(isinstance(v, int) and v > 0 for v in rule.values())
+    ):
+        raise ValueError(f"seed_rule: expected positive integers first, step and most, got {rule!r}")
+    return lambda runs: rule_study.seeds_wanted(runs, **rule)
+
+
 def complete_settings(
-    runs: list[dict[str, Any]], kinds: tuple[str, ...] = KINDS
+    runs: list[dict[str, Any]], kinds: tuple[str, ...] = KINDS, seed_rule: SeedRule | None = None
 ) -> tuple[list[dict[str, Any]], dict[str, dict[str, int]]]:
     """The runs of the settings whose judged runs are complete so far (every kind holds the same
-    seeds, two or more: a seed step fully trained and evaluated), and the runs per kind of the
-    others, which a study still running has not finished: they are left out of every test."""
+    seeds, two or more: a seed step fully trained and evaluated; and, given the study's
+    ``seed_rule``, as many as it asks for), and the runs per kind of the others, which a study
+    still running has not finished (with ``wanted``, the seed rule's count, where it asks for
+    more): they are left out of every test."""
     seeds: dict[str, dict[str, set[int]]] = {}
     for r in runs:
         seeds.setdefault(setting_of(r), {k: set() for k in kinds}).setdefault(r["kind"], set()).add(r["seed"])
     done = {c for c, by in seeds.items() if len({frozenset(by[k]) for k in kinds}) == 1 and len(by[kinds[0]]) >= 2}
     waiting = {c: {k: len(by[k]) for k in kinds} for c, by in seeds.items() if c not in done}
+    if seed_rule is not None:
+        for c in sorted(done):
+            held = len(seeds[c][kinds[0]])
+            if (wanted := seed_rule([r for r in runs if setting_of(r) == c])) > held:
+                done.discard(c)
+                waiting[c] = {**{k: held for k in kinds}, "wanted": wanted}
     return [r for r in runs if setting_of(r) in done], waiting
 
 
@@ -235,14 +263,16 @@ def summarise(
     kinds: tuple[str, ...] = KINDS,
     pairs: list[tuple[str, str]] = PAIRS,
     differs: float = statistics.EQUIVALENCE_MARGIN,
+    seed_rule: SeedRule | None = None,
 ) -> dict[str, Any]:
     """Everything the study's report says, at full precision: the primary verdicts (pool return at
     the last budget; each comparison of ``pairs`` of ``kinds``, one Holm family a budget), and
     each secondary measure labelled as such; the ladders and corrections where the runs have them
-    (``differs``: :func:`corrections`)."""
+    (``differs``: :func:`corrections`). Settings not complete (:func:`complete_settings`, by
+    ``seed_rule`` where given) are left out and named."""
     if not runs:
         raise ValueError("no judged runs: expected results/rule-study/runs/*.json.gz")
-    runs, in_progress = complete_settings(runs, kinds)
+    runs, in_progress = complete_settings(runs, kinds, seed_rule)
     if not runs:
         raise ValueError(f"no setting has its judged runs of every kind yet (in progress: {in_progress})")
     protocols = {r.get("protocol") for r in runs}
@@ -464,6 +494,12 @@ def counts_line(counts: dict[str, int]) -> str:
     return ", ".join(f"{n} {v}" for v, n in counts.items())
 
 
+def _held(by: dict[str, int]) -> str:
+    """A setting in progress: its runs per kind, and the seed rule's count where it asks for more."""
+    held = ", ".join(f"{n} {k}" for k, n in by.items() if k != "wanted")
+    return held + (f", of the {by['wanted']} a kind the seed rule asks for" if "wanted" in by else "")
+
+
 def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MARGIN) -> str:
     """The report: the primary verdicts first, then each secondary measure, labelled."""
     final = summary["budgets"][-1]
@@ -487,9 +523,7 @@ def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MA
             corrections_markdown(s["corrections"], differs),
         ]
     if summary.get("in_progress"):
-        waiting = "; ".join(
-            f"{c} ({', '.join(f'{n} {k}' for k, n in by.items())})" for c, by in summary["in_progress"].items()
-        )
+        waiting = "; ".join(f"{c} ({_held(by)})" for c, by in summary["in_progress"].items())
         extra_top = [f"**Not yet judged** (their runs are still being trained or evaluated; left out): {waiting}.", ""]
     else:
         extra_top = []
@@ -542,6 +576,7 @@ def write_report(
     kinds: tuple[str, ...] = KINDS,
     pairs: list[tuple[str, str]] = PAIRS,
     differs: float = statistics.EQUIVALENCE_MARGIN,
+    seed_rule: SeedRule | None = None,
 ) -> dict[str, Any]:
     """From the study's folder (``runs/*.json.gz``): ``<stem>-report.json``, ``<stem>.md`` and
     ``<stem>.png`` in ``out`` (rule-study-…, or a study of ``kinds`` compared by ``pairs``);
@@ -549,13 +584,18 @@ def write_report(
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
     from pursuit_bench.study.plots import pool_png
 
-    summary = summarise(rule_study.read_runs(where / "runs"), kinds=kinds, pairs=pairs, differs=differs)
+    summary = summarise(
+        rule_study.read_runs(where / "runs"), kinds=kinds, pairs=pairs, differs=differs, seed_rule=seed_rule
+    )
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / f"{stem}-report.json", json.dumps(summary, indent=2) + "\n")
     atomic_write_text(out / f"{stem}.md", markdown(summary, differs))
+    held = {c: sorted({by[c] for by in summary["runs"].values()}) for c in summary["curves"]}
     figure = {
         "curves": summary["curves"],
-        "seeds": {k: list(range(max(v.values()))) for k, v in summary["runs"].items()},
+        "titles": {c: f"{c} ({'/'.join(map(str, n))} runs a kind)" for c, n in held.items()},
+        "runs_label": "the runs a kind in each panel's title",
+        "opponents": "the population",
         "budgets": [{"episodes": b} for b in summary["budgets"]],
     }
     atomic_write_bytes(out / f"{stem}.png", pool_png(figure, measure="pool return"))

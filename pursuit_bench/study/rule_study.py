@@ -245,12 +245,15 @@ def last_budget(run: dict[str, Any]) -> str:
     return str(max(int(b) for b in run["pool"]))
 
 
-def seeds_wanted(runs: list[dict[str, Any]]) -> int:
+def seeds_wanted(
+    runs: list[dict[str, Any]], first: int = FIRST_RUNS, step: int = STEP_RUNS, most: int = MOST_RUNS
+) -> int:
     """Judged runs a kind one condition needs by the seed rule, from its runs evaluated so far:
-    :data:`FIRST_RUNS`; once the first n of both kinds are in (n < :data:`MOST_RUNS`), n +
-    :data:`STEP_RUNS` where some panel has a failed run of either kind among them, else n."""
-    wanted = FIRST_RUNS
-    while wanted < MOST_RUNS:
+    ``first``; once the first n of both kinds are in (n < ``most``), n + ``step`` where some panel
+    has a failed run of either kind among them, else n (the study's: :data:`FIRST_RUNS`,
+    :data:`STEP_RUNS`, :data:`MOST_RUNS`)."""
+    wanted = first
+    while wanted < most:
         chosen = [r for r in runs if r["seed"] < wanted]
         complete = all(sum(r["kind"] == k for r in chosen) >= wanted for k in KINDS)
         if not complete:
@@ -258,7 +261,7 @@ def seeds_wanted(runs: list[dict[str, Any]]) -> int:
         predators = chosen[0]["pool"][last_budget(chosen[0])][FLEEING]["panels"]
         if not any(failed(r, p) for r in chosen for p in predators):
             return wanted
-        wanted += STEP_RUNS
+        wanted += step
     return wanted
 
 

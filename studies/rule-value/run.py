@@ -161,6 +161,7 @@ def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str
             "protocol": "REPRODUCTION.md, Protocol of the rule study",
             "population": rule_study.POPULATION,
             "command": "python studies/rule-value/run.py " + " ".join(sys.argv[1:]),
+            "seed_rule": {"first": rule_study.FIRST_RUNS, "step": rule_study.STEP_RUNS, "most": rule_study.MOST_RUNS},
         }
         marker.write_text(json.dumps(about, indent=2) + "\n")
     budgets = list(rule_study.BUDGETS) if args.budgets is None else [int(b) for b in args.budgets.split(",")]
