@@ -50,6 +50,7 @@ def test_a_stable_baselines3_agent_is_evaluated_like_a_trained_one(tmp_path: Pat
     result = json.loads((out / "eval-predator_0-prey_0.json").read_text())
     assert result["predator_kind"] == "external (my_agents:ppo_predator)"
     assert result["external_agents"] == {"predator_0": "my_agents:ppo_predator", "prey_0": "my_agents:straight_prey"}
+    assert result["protocol"]["prey_epsilon"] is None  # an external prey acts as it is: no ε of ours
     panel = result["panels"][0]
     assert set(panel["episode_returns"]) == {"trained", "always_chase", "always_stalk"}
     assert len(panel["episode_returns"]["trained"]) == 6 and "fleeing_prey" in result["prey_check"]

@@ -480,7 +480,12 @@ def evaluate_agents(
         "mean_return": {a: float(r) for a, r in zip(names, trained.returns.mean(axis=0), strict=True)},
         "distance_travelled": {a: float(d) for a, d in zip(names, trained.distance.mean(axis=0), strict=True)},
         "chase_fraction": {a: float(c) for a, c in zip(predators, trained.chase_fraction.mean(axis=0), strict=True)},
-        "protocol": {"predators": "greedy", "prey_epsilon": prey_epsilon, "draws": PROTOCOL if crn else SEQUENTIAL},
+        "protocol": {
+            "predators": "greedy",
+            # the ε the prey played with: only our learning prey explore (a scripted or external one acts as it is)
+            "prey_epsilon": prey_epsilon if isinstance(agents[prey], LearningAgent) else None,
+            "draws": PROTOCOL if crn else SEQUENTIAL,
+        },
         "prey_check": checked,
         **({"perturbations": perturbations.changed} if perturbations is not None and perturbations.changed else {}),
         **(
