@@ -40,6 +40,18 @@ def test_the_eta_leaves_out_the_start_up_and_says_when_it_is_a_floor(monkeypatch
     assert eta(500) == (False, 62), lines[500]
 
 
+def test_the_sweep_s_first_eta_is_marked_as_a_floor() -> None:
+    """The sweep's ETA at the rate since the command started: a floor (``≥ … (early)``) until a
+    tenth of the work left at the start is done, then plain; ``?`` before any work."""
+    from pursuit_bench.cli.sweep import eta_text
+
+    assert eta_text(done=10.0, start=10.0, total=1000.0, elapsed=5.0) == "?"
+    # 50 of the 990 left done in 100 s: 0.5 a second, 940 left take 1880 s, under a tenth done
+    assert eta_text(done=60.0, start=10.0, total=1000.0, elapsed=100.0) == "≥ 00:31:20 (early)"
+    # 200 done in 400 s: 800 left at 0.5 a second
+    assert eta_text(done=200.0, start=0.0, total=1000.0, elapsed=400.0) == "00:26:40"
+
+
 def _train(out: Path, *extra: str) -> str:
     code, output = run_cli(
         "train", "--condition", "1p-high", "--episodes", "2", "--num-envs", "2", "--out", str(out), *extra

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -109,8 +110,6 @@ def sweep(
 
     Rerunning the same command skips finished runs and resumes the others from their
     checkpoints; Ctrl-C or SIGTERM checkpoints every stack (exit 130 or 143)."""
-    import time
-
     chosen = names(conditions, list(CONDITIONS), "conditions")  # refused before the heavy imports
     kinds = names(predators, PREDATOR_KINDS, "predators")
     kept = episode_counts(keep_checkpoints)
@@ -162,9 +161,7 @@ def sweep(
         start, start_work = time.monotonic(), work_done()
 
         def describe() -> str:
-            rate = (work_done() - start_work) / max(time.monotonic() - start, 1e-9)
-            eta = (work_total - work_done()) / rate if rate > 0 else float("nan")
-            left = "?" if eta != eta else time.strftime("%H:%M:%S", time.gmtime(eta))
+            left = eta_text(work_done(), start_work, work_total, time.monotonic() - start)
             return f"runs done {len(finished)}/{len(configs)} | ETA {left}"
 
         progress = Progress(f"sweep {out}", total, sum(done.values()), describe, every_episodes=log_every)
@@ -212,6 +209,19 @@ def sweep(
     click.echo(f"sweep {out}: {len(finished)} of {len(configs)} runs trained and evaluated")
     if not complete:
         raise click.ClickException("some runs are not finished; rerun the same command to go on")
+
+
+def eta_text(done: float, start: float, total: float, elapsed: float) -> str:
+    """The time a sweep has left at the rate since this command started (``done`` and ``start``:
+    the expected work done now and when it started; ``total`` all of it), ``HH:MM:SS``; marked
+    ``≥ … (early)`` until a tenth of the work left at the start is done, for the first episodes of a
+    run cost less than later ones (its replay fills before it learns), so an early rate runs fast;
+    ``?`` before any work is done."""
+    rate = (done - start) / max(elapsed, 1e-9)
+    if rate <= 0:
+        return "?"
+    left = time.strftime("%H:%M:%S", time.gmtime((total - done) / rate))
+    return f"≥ {left} (early)" if done - start < 0.1 * (total - start) else left
 
 
 def _check_backend(backend: str) -> None:
