@@ -344,12 +344,13 @@ def test_a_hand_written_agent_is_scored_in_one_command(tmp_path: Path, monkeypat
         (
             ["prey_only:make", "--role", "predator"],
             "agent predator_0 (prey_only:make) cannot play --role predator in 1p-low: given 2 observations of 10 "
-            "numbers (the predator's there), act returned shape (2,); expected (mode, direction) per observation",
+            "numbers (the predator's there), act returned shape () for one observation; expected (mode, direction), "
+            "shape (2,)",
         ),
         (
             ["predator_only:make", "--role", "prey", "--conditions", "3p-low-shared"],
             "agent prey_0 (predator_only:make) cannot play --role prey in 3p-low-shared: given 2 observations of 22 "
-            "numbers (the prey's there), act returned shape (2, 2); expected one direction per observation",
+            "numbers (the prey's there), act returned shape (2,) for one observation; expected one direction, shape ()",
         ),
         (
             ["pretrained:3p-low-shared", "--role", "prey", "--conditions", "1p-low,2p-high-shared"],

@@ -68,11 +68,18 @@ class ExternalAgent:
                 f"agent {self.name} ({self.spec}): {call} raised {type(error).__name__}: {error}"
             ) from None
         shape = (len(obs), 2) if self.predator else (len(obs),)
-        expected = "(mode, direction) per observation" if self.predator else "one direction per observation"
         if raw.size != int(np.prod(shape)):
-            raise ValueError(
-                f"agent {self.name} ({self.spec}): {call} returned shape {raw.shape}; expected {expected}, {shape}"
-            )
+            if call == "act":  # said as the agent sees it: one observation in, one action out
+                one = "(mode, direction), shape (2,)" if self.predator else "one direction, shape ()"
+                got = f"shape {raw.shape[1:]} for one observation"
+            else:
+                one = (
+                    f"(mode, direction) per observation, {shape}"
+                    if self.predator
+                    else f"one direction per observation, {shape}"
+                )
+                got = f"shape {raw.shape}"
+            raise ValueError(f"agent {self.name} ({self.spec}): {call} returned {got}; expected {one}")
         if not np.issubdtype(raw.dtype, np.number) or not np.all(np.isfinite(raw)) or np.any(raw != np.round(raw)):
             raise ValueError(f"agent {self.name} ({self.spec}): {call} returned non-integer actions ({raw.dtype})")
         actions = raw.astype(np.int64).reshape(shape)
