@@ -111,7 +111,7 @@ def answer() -> dict[str, Any]:
     conditions still running (the rule study's seed rule applied), and per kind the panels where
     its runs fail significantly more often (reliability, Holm)."""
     from pursuit_bench.env.conditions import CONDITIONS
-    from pursuit_bench.study import report
+    from pursuit_bench.study import report, statistics
 
     summary = rule_study_summary()
     rows: dict[str, tuple[int, ...]] = {}
@@ -129,7 +129,8 @@ def answer() -> dict[str, Any]:
     for line, key in (("failure", "reliability"), ("zero", "reliability_below_zero")):
         more: dict[str, list[tuple[str, str]]] = {"flat": [], "hierarchical": []}
         for r in summary["secondary"][key]:
-            if r["difference"]["p_holm"] <= 0.05:  # the difference is hierarchical's share − flat's
+            # two-sided at 2 ALPHA, as the verdicts; the difference is hierarchical's share − flat's
+            if r["difference"]["p_holm"] <= 2 * statistics.ALPHA:
                 more["hierarchical" if r["difference"]["difference"] > 0 else "flat"].append(
                     (r["condition"], r["predator"])
                 )
@@ -138,7 +139,8 @@ def answer() -> dict[str, Any]:
         "rows": rows,
         "budgets": {"first": summary["budgets"][0], "last": summary["budgets"][-1]},
         "all_panels": sum(c.n_predators for c in CONDITIONS.values()),
-        "running": [c for c in CONDITIONS if c not in judged],
+        "running": [c for c in CONDITIONS if c in summary.get("in_progress", {})],
+        "not_started": [c for c in CONDITIONS if c not in judged and c not in summary.get("in_progress", {})],
         "running_panels": sum(CONDITIONS[c].n_predators for c in CONDITIONS if c not in judged),
         "fail_more": fail_more,
         "failure_margin": summary["failure_margin"],
@@ -177,7 +179,8 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
     """The README's sentences that quote the answer's counts (the bold one first)."""
     primary, head = counts["rows"]["primary"], counts["rows"]["head_start"]
     judged = primary[0]
-    so_far = "" if not counts["running"] else " so far"
+    waiting = counts["running"] + counts["not_started"]
+    so_far = "" if not waiting else " so far"
     behind = "none" if head[4] == 0 else str(head[4])
     fail = counts["fail_more"]
     sentences = [
@@ -191,23 +194,30 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
         f"{abs(counts['failure_margin']):.2f} below the better fixed mode put in a run's place (the line "
         f"fixed before the runs) the flat learner's runs fail significantly more often in "
         f"{_panels(fail['failure']['flat'])} and the hierarchical predator's in "
-        f"{_panels(fail['failure']['hierarchical'])}; at 0 (the sensitivity check), in "
-        f"{len(fail['zero']['flat'])} and {len(fail['zero']['hierarchical'])} panels (Holm).",
+        f"{_panels(fail['failure']['hierarchical'])}; at 0 (the sensitivity check) the flat learner's in "
+        f"{_panels(fail['zero']['flat'])} and the hierarchical predator's in "
+        f"{_panels(fail['zero']['hierarchical'])} (Holm).",
     ]
-    if counts["running"]:
+    if waiting:
+        parts = [f"{', '.join(counts[key])} ({words})" for key, words in (("running", "runs in training"),
+                 ("not_started", "not started")) if counts[key]]  # fmt: skip
         sentences.insert(
             1,
-            f"Not judged yet (runs in training): {', '.join(counts['running'])} ({counts['running_panels']} of the "
-            f"{counts['all_panels']} panels); until they are in, Holm runs over the {judged} panels judged, so "
-            "every count here is interim (one can fall as the family grows to 22).",
+            f"Not judged yet: {'; '.join(parts)}, {counts['running_panels']} of the {counts['all_panels']} panels; "
+            f"until they are in, Holm runs over the {judged} panels judged, so every count here is interim (one "
+            f"can fall as the family grows to {counts['all_panels']}).",
         )
     return sentences
 
 
+def _paragraph(counts: dict[str, Any]) -> str:
+    """The answer's sentences as one paragraph, wrapped at 100 characters."""
+    return textwrap.fill(" ".join(answer_sentences(counts)), 100, break_long_words=False, break_on_hyphens=False)
+
+
 def answer_block(counts: dict[str, Any]) -> str:
     """The README's generated block: the sentences, then the table, between the markers."""
-    paragraph = textwrap.fill(" ".join(answer_sentences(counts)), 100, break_long_words=False, break_on_hyphens=False)
-    return "\n".join([BEGIN, paragraph, "", answer_table(counts), END])
+    return "\n".join([BEGIN, _paragraph(counts), "", answer_table(counts), END])
 
 
 def study_block(counts: dict[str, Any]) -> str:
@@ -216,22 +226,32 @@ def study_block(counts: dict[str, Any]) -> str:
     level down."""
     from pursuit_bench.study import rule_report
 
-    paragraph = textwrap.fill(" ".join(answer_sentences(counts)), 100, break_long_words=False, break_on_hyphens=False)
     tables = ("\n" + rule_report.markdown(rule_study_summary())).replace("\n## ", "\n### ").strip()
-    return "\n".join([STUDY_BEGIN, paragraph, "", tables, STUDY_END])
+    return "\n".join([STUDY_BEGIN, _paragraph(counts), "", tables, STUDY_END])
 
 
-def _replace_block(path: Path, begin: str, end: str, block: str) -> None:
+def _with_block(path: Path, begin: str, end: str, block: str) -> str:
+    """``path``'s text with what lies between its ``begin`` and ``end`` markers (both included)
+    replaced by ``block``; ValueError naming the file where a marker is missing or out of order."""
     text = path.read_text()
-    before, rest = text.split(begin, 1)
-    path.write_text(before + block + rest.split(end, 1)[1])
+    start, stop = text.find(begin), text.find(end)
+    if start < 0 or stop < start:
+        raise ValueError(f"{path.name}: expected the markers {begin!r} and then {end!r}")
+    return text[:start] + block + text[stop + len(end) :]
 
 
 def write_answer() -> None:
-    """Rewrite the README's answer block and REPRODUCTION.md's rule-study block from the results."""
+    """Rewrite the README's answer block and REPRODUCTION.md's rule-study block from the results:
+    both files checked before either is written, each written whole or not at all."""
+    from pursuit_bench.io.files import atomic_write_text
+
     counts = answer()
-    _replace_block(ROOT / "README.md", BEGIN, END, answer_block(counts))
-    _replace_block(ROOT / "REPRODUCTION.md", STUDY_BEGIN, STUDY_END, study_block(counts))
+    texts = {
+        ROOT / "README.md": _with_block(ROOT / "README.md", BEGIN, END, answer_block(counts)),
+        ROOT / "REPRODUCTION.md": _with_block(ROOT / "REPRODUCTION.md", STUDY_BEGIN, STUDY_END, study_block(counts)),
+    }
+    for path, text in texts.items():
+        atomic_write_text(path, text)
 
 
 def readme() -> str:
@@ -257,10 +277,16 @@ def record_seeds(folders: list[Path]) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-seeds", type=Path, nargs="+", default=None, help="Run folders of seeds 0–4.")
-    parser.add_argument("--write-answer", action="store_true", help="Rewrite the README's answer block.")
+    parser.add_argument(
+        "--write-answer", action="store_true", help="Rewrite the README's and REPRODUCTION.md's rule-study blocks."
+    )
     args = parser.parse_args()
     if args.write_answer:
-        write_answer()
+        try:
+            write_answer()
+        except ValueError as error:
+            print(f"check_readme: {error}", file=sys.stderr)
+            return 2
         return 0
     if args.record_seeds:
         record_seeds(args.record_seeds)
@@ -274,6 +300,8 @@ def main() -> int:
     problems = [f"README.md lacks: {s!r}" for s in quoted if s not in text]
     if answer_block(counts) not in (ROOT / "README.md").read_text():
         problems.append(f"README.md's answer is not what the results give (--write-answer):\n{answer_block(counts)}")
+    if study_block(counts) not in (ROOT / "REPRODUCTION.md").read_text():
+        problems.append("REPRODUCTION.md's rule-study block is not what the results give (--write-answer)")
     problems += [f"runs/demo/eval.json: {line}" for line in outside(trained, seeds)]
     for problem in problems:
         print(problem, file=sys.stderr)

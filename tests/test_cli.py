@@ -61,6 +61,7 @@ def test_train_then_eval_writes_the_run_folder(tmp_path: Path) -> None:
         shares = [float(share) for share in re.findall(r"(?:caught|wall|limit) ([\d.]+)%", side)]
         assert len(shares) == 4 and abs(sum(shares) - 100) < 0.25, side
     assert "capture rate" in output and "the paper's protocol: the prey ε-greedy with ε = 0.1" in output
+    assert result["protocol"]["prey_epsilon"] == 0.1  # a learning prey of ours: the ε it played with
 
 
 def test_same_seed_same_eval(tmp_path: Path) -> None:

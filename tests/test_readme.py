@@ -49,12 +49,23 @@ def test_the_readme_s_answer_is_what_the_committed_results_give() -> None:
     assert text.index("## What the project found") < text.index("## Use the env") and len(text.splitlines()) <= 150
     assert "[REPRODUCTION.md](REPRODUCTION.md)" in text
     primary = counts["rows"]["primary"]
-    assert primary[0] == sum(primary[1:]) == counts["all_panels"] - counts["running_panels"]
-    assert (primary[1], primary[4]) == _significant_by_hand(counts["running"])
+    panels, helps, behind = _significant_by_hand(counts["running"] + counts["not_started"])
+    assert (primary[0], primary[1], primary[4]) == (panels, helps, behind)
+    assert panels == counts["all_panels"] - counts["running_panels"]
 
 
-def _significant_by_hand(running: list[str]) -> tuple[int, int]:
-    """The primary verdicts' "rule helps" and "flat better" counts from the committed per-run
+def test_the_answer_blocks_are_written_only_between_their_markers(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text(f"before\n{check_readme.BEGIN}\nold\n{check_readme.END}\nafter\n")
+    assert check_readme._with_block(page, check_readme.BEGIN, check_readme.END, "NEW") == "before\nNEW\nafter\n"
+    for text in (f"{check_readme.BEGIN} no end", f"{check_readme.END} then {check_readme.BEGIN}", "none"):
+        page.write_text(text)
+        with pytest.raises(ValueError, match=r"page\.md: expected the markers"):
+            check_readme._with_block(page, check_readme.BEGIN, check_readme.END, "NEW")
+
+
+def _significant_by_hand(running: list[str]) -> tuple[int, int, int]:
+    """The panels judged, and the primary verdicts' "rule helps" and "flat better" counts, from the committed per-run
     values by a formula written here (scipy's Welch test, Holm's steps), not the study's code: a
     run's pool return is its trained return averaged over the population's members at 15,000
     episodes; the conditions still running are left out."""
@@ -75,7 +86,7 @@ def _significant_by_hand(running: list[str]) -> tuple[int, int]:
         adjusted[i] = running_max
     helps = sum(a <= 0.05 and t.statistic > 0 for a, t in zip(adjusted, tests, strict=True))
     behind = sum(a <= 0.05 and t.statistic < 0 for a, t in zip(adjusted, tests, strict=True))
-    return int(helps), int(behind)
+    return len(tests), int(helps), int(behind)
 
 
 def test_the_readme_keeps_none_of_the_sentences_an_audit_found_wrong() -> None:

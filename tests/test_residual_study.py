@@ -298,6 +298,10 @@ def test_the_pinned_build_is_refused_once_the_package_changes(tmp_path: Path) ->
         run.pin(pinned, later, results)
     message = str(refused.value)
     assert "\n" not in message and "not mixed" in message
+    with pytest.raises(SystemExit, match="not mixed"):  # a try-out is held to the pinned build too
+        run.pin(pinned, later, results, write=False)
+    run.pin(tmp_path / "none.json", later, results, write=False)  # and writes no build.json of its own
+    assert not (tmp_path / "none.json").exists()
     assert started["code"] in message and later["code"] in message
     pinned.unlink()
     (results / "runs").mkdir(parents=True)

@@ -111,8 +111,13 @@ def test_a_condition_the_seed_rule_asks_more_seeds_of_is_left_out_and_named() ->
         summary
     )
     assert "in_progress" not in rule_report.summarise(runs)
+    uneven = rule_report.seed_rule_of({"seed_rule": {"first": 10, "step": 15, "most": 20}})
+    assert (
+        uneven is not None and rule_report.summarise(runs, seed_rule=uneven)["in_progress"]["1p-high"]["wanted"] == 20
+    )
     assert rule_report.seed_rule_of({"format": "x"}) is None
-    for bad in ({"first": 10, "step": 10}, {"first": 0, "step": 10, "most": 30}, [10, 10, 30]):
+    for bad in ({"first": 10, "step": 10}, {"first": 0, "step": 10, "most": 30}, [10, 10, 30],
+                {"first": 40, "step": 10, "most": 30}, {"first": True, "step": 10, "most": 30}):  # fmt: skip
         with pytest.raises(ValueError, match="seed_rule"):
             rule_report.seed_rule_of({"seed_rule": bad})
 

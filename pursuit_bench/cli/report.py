@@ -83,14 +83,15 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
 
     kinds, pairs, differs = rule_report.KINDS, rule_report.PAIRS, rule_report.statistics.EQUIVALENCE_MARGIN
     marker = where / f"{stem}.json"
+    expected = "a seed rule if any" if stem == "rule-study" else "kinds and comparisons, and a seed rule if any"
     try:
         about = json.loads(marker.read_text())
-        seed_rule = rule_report.seed_rule_of(about)
         if stem != "rule-study":
             kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
             differs = float(about.get("differs", differs))
+        seed_rule = rule_report.seed_rule_of(about, kinds)
     except (ValueError, KeyError, TypeError, AttributeError) as error:
-        raise BadInput(f"{marker}: expected kinds and comparisons, and a seed rule if any ({error})") from None
+        raise BadInput(f"{marker}: expected {expected} ({error})") from None
     try:
         summary = rule_report.write_report(where, out, stem, kinds, pairs, differs, seed_rule)
     except ValueError as error:

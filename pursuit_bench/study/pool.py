@@ -1,5 +1,5 @@
-"""Does the rule help? The hierarchical and the flat predator judged against one pool of opponents
-(``pursuit-bench pool``; REPRODUCTION.md, "Does the rule help?").
+"""The pool study: the hierarchical and the flat predator judged against one pool of opponents
+(``pursuit-bench pool``; REPRODUCTION.md, "The pool study").
 
 A sweep trains both kinds on seeds 0 … N-1. The runs of the **pool seeds** (by default the last
 two) are not judged: their prey, at the end of training, form each condition's pool, with
@@ -395,7 +395,7 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
         "seeds": {kind: sorted({r["seed"] for r in result["runs"] if r["kind"] == kind}) for kind in kinds},
         "budgets": by_budget,
         "improvement": improvement,
-        "learning_speed": {"counts": speed_counts, "panels": speed},
+        "learning_speed": {"counts": speed_counts, "panels": speed},  # the head start (the key kept for readers)
         "cross_kind": cross_kind(result),
         "curves": curves(result),
     }

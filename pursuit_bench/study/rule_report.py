@@ -219,20 +219,21 @@ SeedRule = Callable[[list[dict[str, Any]]], int]
 """A study's seed rule: from one setting's judged runs so far, how many a kind it asks for."""
 
 
-def seed_rule_of(about: dict[str, Any]) -> SeedRule | None:
+def seed_rule_of(about: dict[str, Any], kinds: tuple[str, ...] = KINDS) -> SeedRule | None:
     """The seed rule a study's marker file (``rule-study.json``) records, ``{"first", "step",
-    "most"}`` (:func:`rule_study.seeds_wanted`), or None where it records none; ValueError for
-    another form."""
+    "most"}`` over ``kinds`` (:func:`rule_study.seeds_wanted`), or None where it records none;
+    ValueError for another form."""
     if "seed_rule" not in about:
         return None
     rule = about["seed_rule"]
     if (
         not isinstance(rule, dict)
         or sorted(rule) != ["first", "most", "step"]
-        or not all(isinstance(v, int) and v > 0 for v in rule.values())
+        or not all(type(v) is int and v > 0 for v in rule.values())
+        or rule["first"] > rule["most"]
     ):
-        raise ValueError(f"seed_rule: expected positive integers first, step and most, got {rule!r}")
-    return lambda runs: rule_study.seeds_wanted(runs, **rule)
+        raise ValueError(f"seed_rule: expected positive integers first ≤ most, and step, got {rule!r}")
+    return lambda runs: rule_study.seeds_wanted(runs, **rule, kinds=kinds)
 
 
 def complete_settings(

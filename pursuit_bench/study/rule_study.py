@@ -246,22 +246,26 @@ def last_budget(run: dict[str, Any]) -> str:
 
 
 def seeds_wanted(
-    runs: list[dict[str, Any]], first: int = FIRST_RUNS, step: int = STEP_RUNS, most: int = MOST_RUNS
+    runs: list[dict[str, Any]],
+    first: int = FIRST_RUNS,
+    step: int = STEP_RUNS,
+    most: int = MOST_RUNS,
+    kinds: tuple[str, ...] = KINDS,
 ) -> int:
     """Judged runs a kind one condition needs by the seed rule, from its runs evaluated so far:
-    ``first``; once the first n of both kinds are in (n < ``most``), n + ``step`` where some panel
-    has a failed run of either kind among them, else n (the study's: :data:`FIRST_RUNS`,
-    :data:`STEP_RUNS`, :data:`MOST_RUNS`)."""
+    ``first``; once the first n of every kind of ``kinds`` are in (n < ``most``), n + ``step`` (at
+    most ``most``) where some panel has a failed run of any kind among them, else n (the study's:
+    :data:`FIRST_RUNS`, :data:`STEP_RUNS`, :data:`MOST_RUNS`)."""
     wanted = first
     while wanted < most:
         chosen = [r for r in runs if r["seed"] < wanted]
-        complete = all(sum(r["kind"] == k for r in chosen) >= wanted for k in KINDS)
+        complete = all(sum(r["kind"] == k for r in chosen) >= wanted for k in kinds)
         if not complete:
             return wanted
         predators = chosen[0]["pool"][last_budget(chosen[0])][FLEEING]["panels"]
         if not any(failed(r, p) for r in chosen for p in predators):
             return wanted
-        wanted += step
+        wanted = min(wanted + step, most)
     return wanted
 
 

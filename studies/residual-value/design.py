@@ -170,16 +170,7 @@ def seeds_wanted(
     """The rule study's seed rule over the three kinds of one setting (``runs``: its compact
     results against its population): ``first``; once seeds 0 … n-1 of every kind are in (n <
     ``most``), n + ``step`` where some panel has a failed run of any kind among them, else n."""
-    wanted = first
-    while wanted < most:
-        chosen = [r for r in runs if r["seed"] < wanted]
-        if not all(sum(r["kind"] == k for r in chosen) >= wanted for k in KINDS):
-            return wanted
-        predators = chosen[0]["pool"][rule_study.last_budget(chosen[0])][FLEEING]["panels"]
-        if not any(rule_study.failed(r, p) for r in chosen for p in predators):
-            return wanted
-        wanted = min(wanted + step, most)
-    return wanted
+    return rule_study.seeds_wanted(runs, first, step, most, KINDS)
 
 
 def plan() -> list[dict[str, Any]]:

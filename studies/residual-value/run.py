@@ -98,10 +98,11 @@ def package_build(root: Path) -> dict[str, str]:
     return {"commit": commit, "code": code, "training_code": training}
 
 
-def pin(path: Path, current: dict[str, str], results: Path) -> None:
-    """The study's build, ``build.json``: written at the study's first start (commit it), then
-    required: SystemExit if the package's code is another (``current``: :func:`build`), or if the
-    file is gone while ``results`` holds the study's compact results (restore it from git)."""
+def pin(path: Path, current: dict[str, str], results: Path, write: bool = True) -> None:
+    """The study's build, ``build.json``: written at the study's first start (commit it; not by a
+    try-out, ``write=False``), then required: SystemExit if the package's code is another
+    (``current``: :func:`build`), or if the file is gone while ``results`` holds the study's
+    compact results (restore it from git)."""
     from pursuit_bench.io.files import atomic_write_text
 
     if path.exists():
@@ -112,6 +113,8 @@ def pin(path: Path, current: dict[str, str], results: Path) -> None:
                 f"this package is commit {current['commit'][:10]} ({current['code']}): not mixed; run from a "
                 "checkout of the study's build (PLAN.md, How to drive it)"
             )
+        return
+    if not write:
         return
     if any((results / "runs").glob("*.json.gz")):
         raise SystemExit(f"{path}: missing, though {results / 'runs'} holds the study's results: restore it from git")
@@ -580,8 +583,7 @@ def main() -> int:
         current = {"commit": "test", "code": "test", "training_code": "test"}
     else:
         current = build()
-        if args.preset == "reproduction" and args.budgets is None:  # the study itself, not a try-out
-            pin(PIN, current, args.results)
+        pin(PIN, current, args.results, write=args.preset == "reproduction" and args.budgets is None)
     check_build(args.work, current)
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
     stop = [False]
