@@ -186,6 +186,11 @@ def test_a_tiny_run_of_the_driver_reuses_the_rule_study_s_runs(tmp_path: Path) -
     assert "runs the rule study's folders lack" in (tmp_path / "work" / "progress.log").read_text()
     again = subprocess.run(command + options + ["--skip-build-check"], capture_output=True, text=True, timeout=600)
     assert again.returncode == 0 and "evaluating" not in again.stdout  # a rerun redoes nothing
+    moved = [f"--work={tmp_path / 'new-machine'}" if c.startswith("--work=") else c for c in command]
+    fresh = subprocess.run(moved + options + ["--skip-build-check"], capture_output=True, text=True, timeout=600)
+    assert fresh.returncode == 0, fresh.stdout + fresh.stderr
+    trained = [p.name for p in (tmp_path / "new-machine").iterdir() if p.is_dir()]
+    assert trained == [], f"a new machine (the run folders gone, the results kept) trained again: {trained}"
 
 
 def index_names(index: dict) -> list[str]:

@@ -123,3 +123,26 @@ def test_a_run_s_compact_result_keeps_its_own_seed(tmp_path: Path) -> None:
     (tmp_path / "other.json.gz").write_bytes(gzip.compress(b'{"format": "x"}'))
     with pytest.raises(ValueError, match="not a rule-study run"):
         rule_study.read_runs(tmp_path)
+
+
+def test_on_a_new_machine_the_driver_trains_nothing_the_committed_files_hold(tmp_path: Path) -> None:
+    """A new machine keeps the committed population and compact results, not the run folders: the
+    driver resumes from them without training a population or a judged run again (1p-low is done)."""
+    import shutil
+    import subprocess
+    import sys
+
+    results = tmp_path / "results"
+    (results / "runs").mkdir(parents=True)
+    for path in (ROOT / "results" / "rule-study" / "runs").glob("1p-low-*.json.gz"):
+        shutil.copy(path, results / "runs" / path.name)
+    population = ROOT / "pursuit_bench" / "pretrained" / "populations" / "rule-study"
+    command = [sys.executable, str(ROOT / "studies" / "rule-value" / "run.py"), "--workers", "1"]
+    command += ["--conditions", "1p-low", f"--work={tmp_path / 'work'}", f"--results={results}"]
+    command += [f"--population={population}", "--skip-build-check"]
+    command += ["--preset", "quick", "--episodes", "4", "--budgets", "2,4", "--eval-episodes", "1", "--num-envs", "2"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "1p-low: 10 judged runs a kind, done" in done.stdout
+    trained = [p.name for p in (tmp_path / "work").iterdir() if p.is_dir()]
+    assert trained == [], f"trained again on a new machine: {trained}"

@@ -252,6 +252,8 @@ def population(args: Any, stop: list[bool], settings: list[str], current: dict[s
     if missing := [str(path) for path in rules if not path.exists()]:
         return [f"the rule study's population ({', '.join(missing)})"]
     for setting in settings:
+        if (population_folder(args, setting) / "population.json").exists():
+            continue  # written (committed): not trained again, on any machine
         for kind in design.trained_here(setting, "population"):
             seeds = design.population_seeds(kind)
             folder = args.work / f"population-{setting}-{kind}"
@@ -468,6 +470,11 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
         folder = args.work / f"judged-{setting}-from{first}"
         mine = design.trained_here(setting, "judged")
         log(args.work, f"{setting}: judged seeds {first}–{first + step - 1}, {', '.join(mine)} trained here")
+        if all(
+            (out / f"{setting}-{k}-seed{s}.json.gz").exists() for k in design.KINDS for s in range(first, first + step)
+        ):
+            first += step  # judged already (its results committed): not trained again, on any machine
+            continue
         if not sweep(folder, plan_for(setting, mine, first, step, args, keep), args, stop):
             return "stop"
         where = population_folder(args, setting)

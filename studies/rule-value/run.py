@@ -109,6 +109,9 @@ def population(args: Any, stop: list[bool], conditions: list[str], current: dict
     for kind in rule_study.KINDS:
         seeds = rule_study.population_seeds(kind)
         folder = args.work / f"population-{kind}"
+        wanting = [c for c in conditions if not (args.population / c / "population.json").exists()]
+        if not wanting:
+            continue  # every condition's population is written (committed): nothing of this kind to train
         log(args.work, f"population: {kind} prey, seeds {seeds.start}–{seeds.stop - 1}, {len(conditions)} conditions")
         if not sweep(folder, plan_for(kind, conditions, seeds.start, len(seeds), args, ()), args, stop):
             return False
@@ -178,6 +181,12 @@ def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str
             rule_study.check_design({k: list(range(wanted)) for k in rule_study.KINDS}, rule_study.members(condition))
             folder = args.work / f"judged-{condition}-from{first}"
             log(args.work, f"{condition}: judged seeds {first}–{first + step - 1}, both kinds")
+            names = [
+                f"{condition}-{kind}-seed{seed}" for kind in rule_study.KINDS for seed in range(first, first + step)
+            ]
+            if all((out / f"{name}.json.gz").exists() for name in names):
+                first += step  # judged already (its results committed): not trained again, on any machine
+                continue
             if not sweep(folder, plan_for("both", [condition], first, step, args, keep), args, stop):
                 return False
             jobs = []
