@@ -184,6 +184,8 @@ def test_a_tiny_run_of_the_driver_reuses_the_rule_study_s_runs(tmp_path: Path) -
                 assert {k: run["pool"][budget][k] for k in rule["pool"][budget]} == rule["pool"][budget]
         assert ("ladders" in run) == (run["kind"] != "flat")
     assert "runs the rule study's folders lack" in (tmp_path / "work" / "progress.log").read_text()
+    about = json.loads((tmp_path / "results" / "residual-study.json").read_text())
+    assert about["seed_rule"] == {"first": 2, "step": 1, "most": 2} and about["seed_floor"] == {"1p-high": 2}
     again = subprocess.run(command + options + ["--skip-build-check"], capture_output=True, text=True, timeout=600)
     assert again.returncode == 0 and "evaluating" not in again.stdout  # a rerun redoes nothing
     moved = [f"--work={tmp_path / 'new-machine'}" if c.startswith("--work=") else c for c in command]

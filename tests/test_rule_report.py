@@ -115,11 +115,25 @@ def test_a_condition_the_seed_rule_asks_more_seeds_of_is_left_out_and_named() ->
     assert (
         uneven is not None and rule_report.summarise(runs, seed_rule=uneven)["in_progress"]["1p-high"]["wanted"] == 20
     )
+    floored = rule_report.seed_rule_of(
+        {"seed_rule": {"first": 10, "step": 10, "most": 30}, "seed_floor": {"2p-low-shared": 30}}
+    )
+    assert floored is not None  # the rule study judged 30 a kind there: 12 are not all of the setting's runs
+    judged, waiting = rule_report.complete_settings(runs, seed_rule=floored)
+    assert judged == [] and waiting == {
+        "1p-high": {"hierarchical": 12, "flat": 12, "wanted": 20},
+        "2p-low-shared": {"hierarchical": 12, "flat": 12, "wanted": 30},
+    }
+    with pytest.raises(ValueError, match="no setting has its judged runs of every kind yet"):
+        rule_report.summarise(runs, seed_rule=floored)
     assert rule_report.seed_rule_of({"format": "x"}) is None
     for bad in ({"first": 10, "step": 10}, {"first": 0, "step": 10, "most": 30}, [10, 10, 30],
                 {"first": 40, "step": 10, "most": 30}, {"first": True, "step": 10, "most": 30}):  # fmt: skip
         with pytest.raises(ValueError, match="seed_rule"):
             rule_report.seed_rule_of({"seed_rule": bad})
+    for floor in ({"1p-high": 0}, {"1p-high": "30"}, [30]):
+        with pytest.raises(ValueError, match="seed_floor"):
+            rule_report.seed_rule_of({"seed_rule": {"first": 10, "step": 10, "most": 30}, "seed_floor": floor})
 
 
 def test_a_member_that_decides_a_verdict_shows_in_the_leave_one_out_range() -> None:

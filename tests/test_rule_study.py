@@ -146,3 +146,21 @@ def test_on_a_new_machine_the_driver_trains_nothing_the_committed_files_hold(tmp
     assert "1p-low: 10 judged runs a kind, done" in done.stdout
     trained = [p.name for p in (tmp_path / "work").iterdir() if p.is_dir()]
     assert trained == [], f"trained again on a new machine: {trained}"
+
+
+def test_a_second_driver_on_the_same_work_folder_refuses_at_once(tmp_path: Path) -> None:
+    """Two drivers on one study would train the same runs side by side: the second one, started
+    while the first holds the work folder, says so in one line and exits 2."""
+    import subprocess
+    import sys
+
+    from pursuit_bench.io.files import locked
+
+    work = tmp_path / "work"
+    work.mkdir()
+    command = [sys.executable, str(ROOT / "studies" / "rule-value" / "run.py"), "--workers", "1", "--conditions"]
+    command += ["1p-low", f"--work={work}", f"--results={tmp_path / 'results'}", "--skip-build-check"]
+    with locked(work):  # as a running driver holds it
+        refused = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert refused.returncode == 2 and "in use by another pursuit-bench process" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1 and not (work / "progress.log").exists()

@@ -221,11 +221,13 @@ SeedRule = Callable[[list[dict[str, Any]]], int]
 
 def seed_rule_of(about: dict[str, Any], kinds: tuple[str, ...] = KINDS) -> SeedRule | None:
     """The seed rule a study's marker file (``rule-study.json``) records, ``{"first", "step",
-    "most"}`` over ``kinds`` (:func:`rule_study.seeds_wanted`), or None where it records none;
+    "most"}`` over ``kinds`` (:func:`rule_study.seeds_wanted`), raised where the marker's
+    ``seed_floor`` (``{setting: n}``) asks for at least n runs a kind (the residual study's
+    plain settings hold as many as the rule study judged there); None where it records no rule;
     ValueError for another form."""
     if "seed_rule" not in about:
         return None
-    rule = about["seed_rule"]
+    rule, floors = about["seed_rule"], about.get("seed_floor", {})
     if (
         not isinstance(rule, dict)
         or sorted(rule) != ["first", "most", "step"]
@@ -233,7 +235,14 @@ def seed_rule_of(about: dict[str, Any], kinds: tuple[str, ...] = KINDS) -> SeedR
         or rule["first"] > rule["most"]
     ):
         raise ValueError(f"seed_rule: expected positive integers first ≤ most, and step, got {rule!r}")
-    return lambda runs: rule_study.seeds_wanted(runs, **rule, kinds=kinds)
+    if not isinstance(floors, dict) or not all(type(v) is int and v > 0 for v in floors.values()):
+        raise ValueError(f"seed_floor: expected {{setting: a positive integer}}, got {floors!r}")
+
+    def wanted(runs: list[dict[str, Any]]) -> int:
+        floor = floors.get(setting_of(runs[0]), 0) if runs else 0
+        return max(rule_study.seeds_wanted(runs, **rule, kinds=kinds), floor)
+
+    return wanted
 
 
 def complete_settings(

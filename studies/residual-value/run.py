@@ -55,6 +55,17 @@ def log(work: Path, line: str) -> None:
         file.write(stamped + "\n")
 
 
+def record(marker: Path, key: str, value: Any) -> None:
+    """Set one key of the results' marker file (``residual-study.json``), which the report reads
+    the seed rule from; the file is replaced whole."""
+    about = json.loads(marker.read_text())
+    if about.get(key) != value:
+        about[key] = value
+        partial = marker.with_name(marker.name + ".partial")
+        partial.write_text(json.dumps(about, indent=2) + "\n")
+        os.replace(partial, marker)
+
+
 def git(root: Path, *args: str) -> str:
     return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True).stdout
 
@@ -459,6 +470,9 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
         if counted is None:
             return f"{setting}: the rule study's judged runs of {condition} (not all evaluated yet)"
         floor = counted
+        marker = args.results / "residual-study.json"
+        floors = json.loads(marker.read_text()).get("seed_floor", {})
+        record(marker, "seed_floor", {**floors, setting: floor})  # the report's seed rule: at least the rule study's
     first = 0
     while True:
         wanted = max(design.seeds_wanted(own_runs(out, setting), args.first, args.step, args.most), floor)
@@ -592,56 +606,68 @@ def main() -> int:
         current = build()
         pin(PIN, current, args.results, write=args.preset == "reproduction" and args.budgets is None)
     check_build(args.work, current)
-    (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-    stop = [False]
+    from pursuit_bench.io.files import RunBusy, locked
 
-    def asked(signum: int, frame: Any) -> None:
-        stop[0] = True
-        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+    try:
+        with locked(args.work):  # one driver a study: a second one refuses at once
+            (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
+            stop = [False]
 
-    signal.signal(signal.SIGTERM, asked)
-    signal.signal(signal.SIGINT, asked)
-    args.results.mkdir(parents=True, exist_ok=True)
-    marker = args.results / "residual-study.json"  # what `pursuit-bench report` knows the folder by
-    if not marker.exists():
-        from pursuit_bench.study import rule_study
+            def asked(signum: int, frame: Any) -> None:
+                stop[0] = True
+                log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
 
-        about = {
-            "format": rule_study.FORMAT,
-            "protocol": "docs/residual.md, Protocol of the residual study",
-            "kinds": list(design.KINDS),
-            "comparisons": [list(c) for c in design.COMPARISONS],
-            "settings": {s: {"condition": c, "obstacles": n} for s, (c, n) in design.SETTINGS.items()},
-            "differs": design.DIFFERS,
-            "command": "python studies/residual-value/run.py " + " ".join(sys.argv[1:]),
-        }
-        marker.write_text(json.dumps(about, indent=2) + "\n")
-    log(
-        args.work,
-        f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}, "
-        f"training code {current['training_code']}",
-    )
-    while True:
-        waiting = population(args, stop, settings, current)
-        states = (
-            ["stop"] if waiting == ["stop"] else [] if waiting else [judged(args, stop, s, current) for s in settings]
-        )
-        if stop[0] or "stop" in states:
-            log(args.work, "stopped: rerun the same command to resume")
-            return 143
-        waiting += [s for s in states if s != "done"]
-        if not waiting:
-            log(args.work, "finished")
-            return 0
-        log(args.work, "waiting for " + "; ".join(waiting))
-        if args.poll <= 0:
-            return WAITING
-        until = time.monotonic() + args.poll
-        while time.monotonic() < until and not stop[0]:
-            time.sleep(1)
-        if stop[0]:
-            log(args.work, "stopped: rerun the same command to resume")
-            return 143
+            signal.signal(signal.SIGTERM, asked)
+            signal.signal(signal.SIGINT, asked)
+            args.results.mkdir(parents=True, exist_ok=True)
+            marker = args.results / "residual-study.json"  # what `pursuit-bench report` knows the folder by
+            if not marker.exists():
+                from pursuit_bench.study import rule_study
+
+                about = {
+                    "format": rule_study.FORMAT,
+                    "protocol": "docs/residual.md, Protocol of the residual study",
+                    "kinds": list(design.KINDS),
+                    "comparisons": [list(c) for c in design.COMPARISONS],
+                    "settings": {s: {"condition": c, "obstacles": n} for s, (c, n) in design.SETTINGS.items()},
+                    "differs": design.DIFFERS,
+                    "command": "python studies/residual-value/run.py " + " ".join(sys.argv[1:]),
+                }
+                marker.write_text(json.dumps(about, indent=2) + "\n")
+            record(marker, "seed_rule", {"first": args.first, "step": args.step, "most": args.most})
+            log(
+                args.work,
+                f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}, "
+                f"training code {current['training_code']}",
+            )
+            while True:
+                waiting = population(args, stop, settings, current)
+                states = (
+                    ["stop"]
+                    if waiting == ["stop"]
+                    else []
+                    if waiting
+                    else [judged(args, stop, s, current) for s in settings]
+                )
+                if stop[0] or "stop" in states:
+                    log(args.work, "stopped: rerun the same command to resume")
+                    return 143
+                waiting += [s for s in states if s != "done"]
+                if not waiting:
+                    log(args.work, "finished")
+                    return 0
+                log(args.work, "waiting for " + "; ".join(waiting))
+                if args.poll <= 0:
+                    return WAITING
+                until = time.monotonic() + args.poll
+                while time.monotonic() < until and not stop[0]:
+                    time.sleep(1)
+                if stop[0]:
+                    log(args.work, "stopped: rerun the same command to resume")
+                    return 143
+    except RunBusy as error:
+        print(f"{error}: stop it first (kill -TERM its pid), or wait for it to finish", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -247,19 +247,29 @@ def main() -> int:
     args.work.mkdir(parents=True, exist_ok=True)
     current = {"commit": "test", "code": "test"} if args.skip_build_check else build()
     check_build(args.work, current)
-    (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-    stop = [False]
+    from pursuit_bench.io.files import RunBusy, locked
 
-    def asked(signum: int, frame: Any) -> None:
-        stop[0] = True
-        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+    try:
+        with locked(args.work):  # one driver a study: a second one refuses at once
+            (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
+            stop = [False]
 
-    signal.signal(signal.SIGTERM, asked)
-    signal.signal(signal.SIGINT, asked)
-    log(args.work, f"rule study: {', '.join(conditions)}; commit {current['commit'][:10]}, code {current['code']}")
-    finished = population(args, stop, conditions, current) and judged(args, stop, conditions, current)
-    log(args.work, "finished" if finished else "stopped: rerun the same command to resume")
-    return 0 if finished else 143
+            def asked(signum: int, frame: Any) -> None:
+                stop[0] = True
+                log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+
+            signal.signal(signal.SIGTERM, asked)
+            signal.signal(signal.SIGINT, asked)
+            log(
+                args.work,
+                f"rule study: {', '.join(conditions)}; commit {current['commit'][:10]}, code {current['code']}",
+            )
+            finished = population(args, stop, conditions, current) and judged(args, stop, conditions, current)
+            log(args.work, "finished" if finished else "stopped: rerun the same command to resume")
+            return 0 if finished else 143
+    except RunBusy as error:
+        print(f"{error}: stop it first (kill -TERM its pid), or wait for it to finish", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":
