@@ -55,15 +55,21 @@ def log(work: Path, line: str) -> None:
         file.write(stamped + "\n")
 
 
-def record(marker: Path, key: str, value: Any) -> None:
-    """Set one key of the results' marker file (``residual-study.json``), which the report reads
-    the seed rule from; the file is replaced whole."""
-    about = json.loads(marker.read_text())
-    if about.get(key) != value:
-        about[key] = value
-        partial = marker.with_name(marker.name + ".partial")
-        partial.write_text(json.dumps(about, indent=2) + "\n")
-        os.replace(partial, marker)
+def record(marker: Path, seed_rule: dict[str, int] | None = None, floor: tuple[str, int] | None = None) -> None:
+    """Write into the results' marker file (``residual-study.json``), which the report reads the
+    seed rule from: the study's ``seed_rule``, or one plain setting's ``floor`` (the rule study's
+    count there) into ``seed_floor``; the file is replaced whole. SystemExit if it is not JSON."""
+    from pursuit_bench.io.files import atomic_write_text
+
+    try:
+        about = json.loads(marker.read_text())
+    except json.JSONDecodeError as error:
+        raise SystemExit(f"{marker}: not JSON ({error}); restore it from git") from None
+    if seed_rule is not None:
+        about["seed_rule"] = seed_rule
+    if floor is not None:
+        about["seed_floor"] = {**about.get("seed_floor", {}), floor[0]: floor[1]}
+    atomic_write_text(marker, json.dumps(about, indent=2) + "\n")
 
 
 def git(root: Path, *args: str) -> str:
@@ -470,9 +476,7 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
         if counted is None:
             return f"{setting}: the rule study's judged runs of {condition} (not all evaluated yet)"
         floor = counted
-        marker = args.results / "residual-study.json"
-        floors = json.loads(marker.read_text()).get("seed_floor", {})
-        record(marker, "seed_floor", {**floors, setting: floor})  # the report's seed rule: at least the rule study's
+        record(args.results / "residual-study.json", floor=(setting, floor))  # the report's: at least the rule study's
     first = 0
     while True:
         wanted = max(design.seeds_wanted(own_runs(out, setting), args.first, args.step, args.most), floor)
@@ -483,12 +487,12 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
         design.check_design({k: list(range(wanted)) for k in design.KINDS}, design.members(setting))
         folder = args.work / f"judged-{setting}-from{first}"
         mine = design.trained_here(setting, "judged")
-        log(args.work, f"{setting}: judged seeds {first}–{first + step - 1}, {', '.join(mine)} trained here")
         if all(
             (out / f"{setting}-{k}-seed{s}.json.gz").exists() for k in design.KINDS for s in range(first, first + step)
         ):
             first += step  # judged already (its results committed): not trained again, on any machine
             continue
+        log(args.work, f"{setting}: judged seeds {first}–{first + step - 1}, {', '.join(mine)} trained here")
         if not sweep(folder, plan_for(setting, mine, first, step, args, keep), args, stop):
             return "stop"
         where = population_folder(args, setting)
@@ -600,74 +604,78 @@ def main() -> int:
         print(f"--episodes {args.episodes}: the study's last budget is {last}", file=sys.stderr)
         return 2
     args.work.mkdir(parents=True, exist_ok=True)
+    from pursuit_bench.io.files import RunBusy, locked
+
+    try:
+        with locked(args.work):  # one driver a study: a second one refuses before it writes anything
+            return drive(args, settings)
+    except RunBusy as error:
+        print(f"{error}: stop it first (kill -TERM its pid), or wait for it to finish", file=sys.stderr)
+        return 2
+
+
+def drive(args: Any, settings: list[str]) -> int:
+    """The study from where it stands: 0 once finished, 143 when stopped by a signal, WAITING when
+    it waits for the rule study and ``--poll`` is 0."""
+    from pursuit_bench.io.files import atomic_write_text
+
     if args.skip_build_check:
         current = {"commit": "test", "code": "test", "training_code": "test"}
     else:
         current = build()
         pin(PIN, current, args.results, write=args.preset == "reproduction" and args.budgets is None)
     check_build(args.work, current)
-    from pursuit_bench.io.files import RunBusy, locked
+    (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
+    stop = [False]
 
-    try:
-        with locked(args.work):  # one driver a study: a second one refuses at once
-            (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-            stop = [False]
+    def asked(signum: int, frame: Any) -> None:
+        stop[0] = True
+        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
 
-            def asked(signum: int, frame: Any) -> None:
-                stop[0] = True
-                log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+    signal.signal(signal.SIGTERM, asked)
+    signal.signal(signal.SIGINT, asked)
+    args.results.mkdir(parents=True, exist_ok=True)
+    marker = args.results / "residual-study.json"  # what `pursuit-bench report` knows the folder by
+    if not marker.exists():
+        from pursuit_bench.study import rule_study
 
-            signal.signal(signal.SIGTERM, asked)
-            signal.signal(signal.SIGINT, asked)
-            args.results.mkdir(parents=True, exist_ok=True)
-            marker = args.results / "residual-study.json"  # what `pursuit-bench report` knows the folder by
-            if not marker.exists():
-                from pursuit_bench.study import rule_study
-
-                about = {
-                    "format": rule_study.FORMAT,
-                    "protocol": "docs/residual.md, Protocol of the residual study",
-                    "kinds": list(design.KINDS),
-                    "comparisons": [list(c) for c in design.COMPARISONS],
-                    "settings": {s: {"condition": c, "obstacles": n} for s, (c, n) in design.SETTINGS.items()},
-                    "differs": design.DIFFERS,
-                    "command": "python studies/residual-value/run.py " + " ".join(sys.argv[1:]),
-                }
-                marker.write_text(json.dumps(about, indent=2) + "\n")
-            record(marker, "seed_rule", {"first": args.first, "step": args.step, "most": args.most})
-            log(
-                args.work,
-                f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}, "
-                f"training code {current['training_code']}",
-            )
-            while True:
-                waiting = population(args, stop, settings, current)
-                states = (
-                    ["stop"]
-                    if waiting == ["stop"]
-                    else []
-                    if waiting
-                    else [judged(args, stop, s, current) for s in settings]
-                )
-                if stop[0] or "stop" in states:
-                    log(args.work, "stopped: rerun the same command to resume")
-                    return 143
-                waiting += [s for s in states if s != "done"]
-                if not waiting:
-                    log(args.work, "finished")
-                    return 0
-                log(args.work, "waiting for " + "; ".join(waiting))
-                if args.poll <= 0:
-                    return WAITING
-                until = time.monotonic() + args.poll
-                while time.monotonic() < until and not stop[0]:
-                    time.sleep(1)
-                if stop[0]:
-                    log(args.work, "stopped: rerun the same command to resume")
-                    return 143
-    except RunBusy as error:
-        print(f"{error}: stop it first (kill -TERM its pid), or wait for it to finish", file=sys.stderr)
-        return 2
+        about = {
+            "format": rule_study.FORMAT,
+            "protocol": "docs/residual.md, Protocol of the residual study",
+            "kinds": list(design.KINDS),
+            "comparisons": [list(c) for c in design.COMPARISONS],
+            "settings": {s: {"condition": c, "obstacles": n} for s, (c, n) in design.SETTINGS.items()},
+            "differs": design.DIFFERS,
+            "command": "python studies/residual-value/run.py " + " ".join(sys.argv[1:]),
+        }
+        atomic_write_text(marker, json.dumps(about, indent=2) + "\n")
+    record(marker, seed_rule={"first": args.first, "step": args.step, "most": args.most})
+    log(
+        args.work,
+        f"residual study: {', '.join(settings)}; commit {current['commit'][:10]}, code {current['code']}, "
+        f"training code {current['training_code']}",
+    )
+    while True:
+        waiting = population(args, stop, settings, current)
+        states = (
+            ["stop"] if waiting == ["stop"] else [] if waiting else [judged(args, stop, s, current) for s in settings]
+        )
+        if stop[0] or "stop" in states:
+            log(args.work, "stopped: rerun the same command to resume")
+            return 143
+        waiting += [s for s in states if s != "done"]
+        if not waiting:
+            log(args.work, "finished")
+            return 0
+        log(args.work, "waiting for " + "; ".join(waiting))
+        if args.poll <= 0:
+            return WAITING
+        until = time.monotonic() + args.poll
+        while time.monotonic() < until and not stop[0]:
+            time.sleep(1)
+        if stop[0]:
+            log(args.work, "stopped: rerun the same command to resume")
+            return 143
 
 
 if __name__ == "__main__":

@@ -106,12 +106,12 @@ def population(args: Any, stop: list[bool], conditions: list[str], current: dict
     from pursuit_bench.study import rule_study
     from pursuit_bench.training import runs
 
-    for kind in rule_study.KINDS:
+    # every condition's population written (committed): nothing to train; if only some are, the
+    # sweeps train all of them, as they were planned (a sweep's plan cannot change once opened)
+    written = all((args.population / c / "population.json").exists() for c in conditions)
+    for kind in () if written else rule_study.KINDS:
         seeds = rule_study.population_seeds(kind)
         folder = args.work / f"population-{kind}"
-        wanting = [c for c in conditions if not (args.population / c / "population.json").exists()]
-        if not wanting:
-            continue  # every condition's population is written (committed): nothing of this kind to train
         log(args.work, f"population: {kind} prey, seeds {seeds.start}–{seeds.stop - 1}, {len(conditions)} conditions")
         if not sweep(folder, plan_for(kind, conditions, seeds.start, len(seeds), args, ()), args, stop):
             return False
@@ -152,6 +152,7 @@ def evaluate(
 
 
 def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str, str]) -> bool:
+    from pursuit_bench.io.files import atomic_write_text
     from pursuit_bench.study import rule_study
     from pursuit_bench.study.jobs import run_jobs
 
@@ -166,7 +167,7 @@ def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str
             "command": "python studies/rule-value/run.py " + " ".join(sys.argv[1:]),
             "seed_rule": {"first": rule_study.FIRST_RUNS, "step": rule_study.STEP_RUNS, "most": rule_study.MOST_RUNS},
         }
-        marker.write_text(json.dumps(about, indent=2) + "\n")
+        atomic_write_text(marker, json.dumps(about, indent=2) + "\n")
     budgets = list(rule_study.BUDGETS) if args.budgets is None else [int(b) for b in args.budgets.split(",")]
     keep = tuple(budgets[:-1])
     for condition in conditions:
@@ -180,13 +181,13 @@ def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str
             step = min(rule_study.STEP_RUNS if first else rule_study.FIRST_RUNS, wanted - first)
             rule_study.check_design({k: list(range(wanted)) for k in rule_study.KINDS}, rule_study.members(condition))
             folder = args.work / f"judged-{condition}-from{first}"
-            log(args.work, f"{condition}: judged seeds {first}–{first + step - 1}, both kinds")
             names = [
                 f"{condition}-{kind}-seed{seed}" for kind in rule_study.KINDS for seed in range(first, first + step)
             ]
             if all((out / f"{name}.json.gz").exists() for name in names):
                 first += step  # judged already (its results committed): not trained again, on any machine
                 continue
+            log(args.work, f"{condition}: judged seeds {first}–{first + step - 1}, both kinds")
             if not sweep(folder, plan_for("both", [condition], first, step, args, keep), args, stop):
                 return False
             jobs = []
@@ -245,31 +246,33 @@ def main() -> int:
         print(f"--episodes {args.episodes}: the study's last budget is {last}", file=sys.stderr)
         return 2
     args.work.mkdir(parents=True, exist_ok=True)
-    current = {"commit": "test", "code": "test"} if args.skip_build_check else build()
-    check_build(args.work, current)
     from pursuit_bench.io.files import RunBusy, locked
 
     try:
-        with locked(args.work):  # one driver a study: a second one refuses at once
-            (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-            stop = [False]
-
-            def asked(signum: int, frame: Any) -> None:
-                stop[0] = True
-                log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
-
-            signal.signal(signal.SIGTERM, asked)
-            signal.signal(signal.SIGINT, asked)
-            log(
-                args.work,
-                f"rule study: {', '.join(conditions)}; commit {current['commit'][:10]}, code {current['code']}",
-            )
-            finished = population(args, stop, conditions, current) and judged(args, stop, conditions, current)
-            log(args.work, "finished" if finished else "stopped: rerun the same command to resume")
-            return 0 if finished else 143
+        with locked(args.work):  # one driver a study: a second one refuses before it writes anything
+            return drive(args, conditions)
     except RunBusy as error:
         print(f"{error}: stop it first (kill -TERM its pid), or wait for it to finish", file=sys.stderr)
         return 2
+
+
+def drive(args: Any, conditions: list[str]) -> int:
+    """The study from where it stands: 0 once finished, 143 when stopped by a signal."""
+    current = {"commit": "test", "code": "test"} if args.skip_build_check else build()
+    check_build(args.work, current)
+    (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
+    stop = [False]
+
+    def asked(signum: int, frame: Any) -> None:
+        stop[0] = True
+        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+
+    signal.signal(signal.SIGTERM, asked)
+    signal.signal(signal.SIGINT, asked)
+    log(args.work, f"rule study: {', '.join(conditions)}; commit {current['commit'][:10]}, code {current['code']}")
+    finished = population(args, stop, conditions, current) and judged(args, stop, conditions, current)
+    log(args.work, "finished" if finished else "stopped: rerun the same command to resume")
+    return 0 if finished else 143
 
 
 if __name__ == "__main__":
