@@ -88,8 +88,6 @@ RULE_STUDY = ROOT / "results" / "rule-study"
 REPRODUCTION = ROOT / "results" / "reproduction"
 BEGIN = "<!-- answer:begin: scripts/check_readme.py --write-answer writes this block -->"
 END = "<!-- answer:end -->"
-
-
 STUDY_BEGIN = "<!-- rule-study:begin: scripts/check_readme.py --write-answer writes this block -->"
 STUDY_END = "<!-- rule-study:end -->"
 

@@ -58,18 +58,21 @@ def log(work: Path, line: str) -> None:
 def record(marker: Path, seed_rule: dict[str, int] | None = None, floor: tuple[str, int] | None = None) -> None:
     """Write into the results' marker file (``residual-study.json``), which the report reads the
     seed rule from: the study's ``seed_rule``, or one plain setting's ``floor`` (the rule study's
-    count there) into ``seed_floor``; the file is replaced whole. SystemExit if it is not JSON."""
+    count there) into ``seed_floor``; the file is replaced whole, and only when that changes it
+    (the driver says the floor again on every pass). SystemExit if it is not JSON."""
     from pursuit_bench.io.files import atomic_write_text
 
     try:
         about = json.loads(marker.read_text())
     except json.JSONDecodeError as error:
         raise SystemExit(f"{marker}: not JSON ({error}); restore it from git") from None
+    updated = dict(about)
     if seed_rule is not None:
-        about["seed_rule"] = seed_rule
+        updated["seed_rule"] = seed_rule
     if floor is not None:
-        about["seed_floor"] = {**about.get("seed_floor", {}), floor[0]: floor[1]}
-    atomic_write_text(marker, json.dumps(about, indent=2) + "\n")
+        updated["seed_floor"] = {**about.get("seed_floor", {}), floor[0]: floor[1]}
+    if updated != about:
+        atomic_write_text(marker, json.dumps(updated, indent=2) + "\n")
 
 
 def git(root: Path, *args: str) -> str:
