@@ -185,10 +185,10 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
         f"**On the primary measure, fixed before the runs, the rule helps in {primary[1]} of the {judged} "
         f"panels judged{so_far}, the flat learner is better in {primary[4]}, {primary[2]} are equivalent "
         f"within ±0.05 and {primary[3]} are not resolved.**",
-        f"The rule's clearest effect is a head start: averaged over {counts['budgets']['first']}–"
+        f"The rule's clearest effect is a head start (secondary): averaged over {counts['budgets']['first']}–"
         f"{counts['budgets']['last']:,} episodes, the return is significantly higher with the rule in "
         f"{head[1]} of the {judged} panels and lower in {behind}.",
-        f"Reliability, a result of its own, depends on where failure is drawn: at "
+        f"Reliability (secondary), a result of its own, depends on where failure is drawn: at "
         f"{abs(counts['failure_margin']):.2f} below the better fixed mode put in a run's place (the line "
         f"fixed before the runs) the flat learner's runs fail significantly more often in "
         f"{_panels(fail['failure']['flat'])} and the hierarchical predator's in "

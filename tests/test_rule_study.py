@@ -110,6 +110,20 @@ def test_the_seed_rule_adds_seeds_to_a_split_and_nowhere_else() -> None:
     assert rule_study.seeds_wanted(most) == 30
 
 
+def test_a_margin_on_the_line_but_for_its_last_bits_does_not_fail() -> None:
+    def run(trained: list[float], stalk: list[float]) -> dict:
+        members = {
+            f"m{i}": {"panels": {"predator_0": [t, -1.0, s]}}
+            for i, (t, s) in enumerate(zip(trained, stalk, strict=True))
+        }
+        return {"pool": {"15000": members}}
+
+    tied = run([0.3, 0.2, 0.1], [0.2, 0.2, 0.2])  # equal means in exact arithmetic
+    assert rule_study.pooled(tied["pool"]["15000"], "predator_0")["margin"] != 0.0  # but not in floats
+    assert not rule_study.failed(tied, "predator_0", 0.0)
+    assert rule_study.failed(run([0.3, 0.2, 0.1], [0.2, 0.2, 0.21]), "predator_0", 0.0)
+
+
 def test_conditions_run_cheapest_first() -> None:
     ordered = rule_study.order()
     assert sorted(ordered) == sorted(CONDITIONS) and ordered[0].endswith("low") and ordered[-1] == "1p-high"

@@ -244,3 +244,44 @@ def test_the_strict_count_uses_the_seeds_every_panel_has() -> None:
     ]
     counts = report.strict_counts(table)
     assert counts["seeds"] == [1, 2] and counts["counts"] == [1, 1]  # seed 1: 1p-high wins; seed 2: 1p-low wins
+
+
+def _boschloo_by_hand(a: int, n_a: int, b: int, n_b: int) -> float:
+    """Boschloo's two-sided p of two binomial samples (a of n_a, b of n_b), from its definition:
+    the one-sided Fisher p as the statistic, its tail's probability maximised over the common
+    success probability on a fine grid, twice the smaller one-sided p."""
+    ii, jj = np.meshgrid(np.arange(n_a + 1), np.arange(n_b + 1), indexing="ij")
+    total = ii + jj
+    # Fisher's one-sided p of every outcome: P(X >= i) and P(X <= i), X hypergeometric given i + j
+    greater = stats.hypergeom.sf(ii - 1, n_a + n_b, total, n_a)
+    less = stats.hypergeom.cdf(ii, n_a + n_b, total, n_a)
+    grid = np.linspace(0.0005, 0.9995, 2000)
+    p_a = stats.binom.pmf(np.arange(n_a + 1)[None], n_a, grid[:, None])
+    p_b = stats.binom.pmf(np.arange(n_b + 1)[None], n_b, grid[:, None])
+    weights = p_a[:, :, None] * p_b[:, None, :]  # grid × outcomes of a × outcomes of b
+    one_sided = []
+    for statistic in (greater, less):
+        tail = statistic <= statistic[a, b] + 1e-12
+        one_sided.append(float((weights * tail[None]).sum(axis=(1, 2)).max()))
+    return min(1.0, 2 * min(one_sided))
+
+
+@pytest.mark.parametrize("a, n_a, b, n_b", [(0, 30, 10, 30), (10, 30, 0, 30), (3, 10, 20, 30), (19, 30, 26, 30)])
+def test_the_difference_of_two_failure_shares_is_boschloo_s_test_of_two_binomial_samples(
+    a: int, n_a: int, b: int, n_b: int
+) -> None:
+    result = statistics.share_difference(a, n_a, b, n_b)
+    assert result["difference"] == pytest.approx(a / n_a - b / n_b)
+    assert result["p"] == pytest.approx(_boschloo_by_hand(a, n_a, b, n_b), rel=0.02)
+    # the same counts read the other way round (the kinds as rows) give another p: the test tells them apart
+    swapped = statistics.share_difference(a, a + b, n_a - a, n_a - a + n_b - b)["p"]
+    assert swapped != pytest.approx(result["p"], rel=0.05)
+
+
+def test_measures_equal_but_for_their_last_bits_are_ties() -> None:
+    summed = 0.1 + 0.2 + 0.3  # 0.6 in exact arithmetic, 0.6000000000000001 in floats
+    assert summed != 0.6
+    above = np.array([summed, 0.9])
+    below = np.array([0.6, 0.2])
+    # summed vs 0.6 is a tie (half); the other three pairs are clear wins
+    assert statistics.probability_of_improvement([above], [below]) == pytest.approx(3.5 / 4)

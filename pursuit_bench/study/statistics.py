@@ -264,11 +264,19 @@ def detectable(sd: float, n: int, alpha: float = ALPHA, power: float = 0.8) -> f
     return float(hi * sd / np.sqrt(n))
 
 
+#: Two measures closer than this are equal. A run's measures are means of episode returns summed
+#: in different orders, so values equal in exact arithmetic can differ in their last bits (a pool
+#: margin of exactly 0 came out as -2.8e-17): a comparison with a line or another run must not
+#: read that as a difference.
+TIE = 1e-12
+
+
 def _pairs_above(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The share of pairs (x_i, y_j) with x_i > y_j, ties half, over the last axis of each
-    (leading axes: resamples)."""
-    above = x[..., :, None] > y[..., None, :]
-    tied = x[..., :, None] == y[..., None, :]
+    """The share of pairs (x_i, y_j) with x_i > y_j, ties (within :data:`TIE`) half, over the last
+    axis of each (leading axes: resamples)."""
+    gap = x[..., :, None] - y[..., None, :]
+    above = gap > TIE
+    tied = np.abs(gap) <= TIE
     return (above + 0.5 * tied).mean(axis=(-2, -1))
 
 
@@ -360,7 +368,11 @@ def wilson_interval(count: int, n: int, confidence: float = CONFIDENCE) -> list[
 
 def share_difference(count_a: int, n_a: int, count_b: int, n_b: int) -> dict[str, Any]:
     """``count_a / n_a - count_b / n_b`` with Boschloo's exact unconditional test (two-sided; more
-    powerful than Fisher's at these counts, and exact: no large-sample approximation)."""
-    table = [[count_a, n_a - count_a], [count_b, n_b - count_b]]
+    powerful than Fisher's at these counts, and exact: no large-sample approximation).
+
+    SciPy's ``boschloo_exact`` takes each *column* of the 2×2 table as one binomial sample, so the
+    kinds are the columns (a table with the kinds as rows tests whether failures and successes
+    have the same share of kind a: another question, other p-values)."""
+    table = [[count_a, count_b], [n_a - count_a, n_b - count_b]]
     p = 1.0 if count_a + count_b in (0, n_a + n_b) else float(stats.boschloo_exact(table).pvalue)
     return {"difference": count_a / n_a - count_b / n_b, "p": min(1.0, p)}
