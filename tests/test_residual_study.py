@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
 import pytest
 
 from pursuit_bench import pretrained
@@ -52,6 +53,35 @@ def test_the_population_is_disjoint_from_the_judged_runs_and_holds_no_twins() ->
     twin = [*design.members("1p-high"), {"name": "again", "kind": "residual", "policy": None, "seed": 1004}]
     with pytest.raises(ValueError, match="repeat"):
         design.check_design({}, twin)
+
+
+def test_the_committed_populations_follow_the_design() -> None:
+    """Whatever population the study has committed: per setting the members the design names; the
+    rule study's members of a plain setting byte for byte the rule study's files; every learned
+    member's header saying its seed, condition, obstacles and kind; no two members with the same
+    weights."""
+    populations = ROOT / "pursuit_bench" / "pretrained" / "populations"
+    for setting in design.SETTINGS:
+        folder = populations / design.population_name(setting) / design.condition_of(setting)
+        if not (folder / "population.json").exists():
+            continue
+        members = json.loads((folder / "population.json").read_text())["members"]
+        assert [m["name"] for m in members] == [m["name"] for m in design.members(setting)], setting
+        seen: list[np.ndarray] = []
+        for member in members:
+            if member["policy"] is not None:
+                continue
+            path = folder / member["files"]["prey_0"]
+            weights, header = pretrained.read(path)
+            training = json.loads(header["training"])
+            assert (header["condition"], header["seed"]) == (design.condition_of(setting), str(member["seed"]))
+            assert (training["obstacles"], training["predator"]) == (design.obstacles_of(setting), member["kind"])
+            if design.plain(setting) and member["kind"] != "residual":
+                rule = populations / rule_study.POPULATION / folder.name / path.relative_to(folder)
+                assert path.read_bytes() == rule.read_bytes(), (setting, member["name"])
+            flat = np.concatenate([w.numpy().ravel() for w in weights.values()])
+            assert not any(np.array_equal(flat, other) for other in seen), (setting, member["name"])
+            seen.append(flat)
 
 
 def test_the_plan_lists_what_the_protocol_says() -> None:
