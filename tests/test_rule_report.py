@@ -336,12 +336,15 @@ def test_three_kinds_are_compared_pairwise_in_one_holm_family_a_budget() -> None
 
 def test_the_residual_study_s_folder_is_reported_by_the_command(tmp_path: Path) -> None:
     where = tmp_path / "residual-study"
+    where.mkdir()
+    about = {"kinds": list(KINDS3), "comparisons": [list(p) for p in PAIRS3], "differs": 0.05}
+    (where / "residual-study.json").write_text(json.dumps(about) + "\n")
+    code, output = run_cli("report", str(where))  # the study's marker, no run yet: its own folder named
+    assert code == 2 and f"{where}: no judged runs yet" in output and "rule-study" not in output, output
     for run in three_kind_runs(n=4):
         extra = {k: run[k] for k in ("protocol", "episodes", "pool", "setting", "obstacles")}
         extra.update({k: run[k] for k in ("ladders", "corrections") if k in run})
         rule_study.write_run(where / "runs", run["name"], run["condition"], run["kind"], run["seed"], "abc", extra)
-    about = {"kinds": list(KINDS3), "comparisons": [list(p) for p in PAIRS3], "differs": 0.05}
-    (where / "residual-study.json").write_text(json.dumps(about) + "\n")
     code, output = run_cli("report", str(where))
     assert code == 0, output
     assert "primary, pool return at 15000 episodes:" in output and "residual better than hierarchical" in output

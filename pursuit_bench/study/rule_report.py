@@ -281,7 +281,7 @@ def summarise(
     (``differs``: :func:`corrections`). Settings not complete (:func:`complete_settings`, by
     ``seed_rule`` where given) are left out and named."""
     if not runs:
-        raise ValueError("no judged runs: expected results/rule-study/runs/*.json.gz")
+        raise ValueError("no judged runs: expected runs/*.json.gz in the study's folder")
     runs, in_progress = complete_settings(runs, kinds, seed_rule)
     if not runs:
         raise ValueError(f"no setting has its judged runs of every kind yet (in progress: {in_progress})")
@@ -594,9 +594,10 @@ def write_report(
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
     from pursuit_bench.study.plots import pool_png
 
-    summary = summarise(
-        rule_study.read_runs(where / "runs"), kinds=kinds, pairs=pairs, differs=differs, seed_rule=seed_rule
-    )
+    runs = rule_study.read_runs(where / "runs")
+    if not runs:
+        raise ValueError(f"{where}: no judged runs yet (expected {where / 'runs'}/*.json.gz)")
+    summary = summarise(runs, kinds=kinds, pairs=pairs, differs=differs, seed_rule=seed_rule)
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / f"{stem}-report.json", json.dumps(summary, indent=2) + "\n")
     atomic_write_text(out / f"{stem}.md", markdown(summary, differs))
