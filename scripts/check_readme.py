@@ -9,8 +9,9 @@ README gives them as the spread over seeds 0–4 measured here (``results/readme
 written by ``--record-seeds``), and this script checks that the README quotes that spread and
 that the main job's seed-0 figures lie inside it. The README's answer (the block between its
 ``answer:begin`` and ``answer:end`` markers: the sentences that quote the counts, and the table)
-is recomputed from the committed results (``results/rule-study/``, ``results/reproduction/``).
-Exits 1 naming any sentence the README lacks.
+is recomputed from the committed results (``results/rule-study/``, ``results/reproduction/``), as are
+REPRODUCTION.md's rule-study block and docs/residual.md's residual-study block
+(``results/residual-study/``). Exits 1 naming any sentence the README lacks or block that differs.
 
     python scripts/check_readme.py --record-seeds MAINJOB/seed*   # run folders of seeds 0-4
     python scripts/check_readme.py --write-answer                 # rewrite the answer block
@@ -90,6 +91,10 @@ BEGIN = "<!-- answer:begin: scripts/check_readme.py --write-answer writes this b
 END = "<!-- answer:end -->"
 STUDY_BEGIN = "<!-- rule-study:begin: scripts/check_readme.py --write-answer writes this block -->"
 STUDY_END = "<!-- rule-study:end -->"
+RESIDUAL_STUDY = ROOT / "results" / "residual-study"
+RESIDUAL_BEGIN = "<!-- residual-study:begin: scripts/check_readme.py --write-answer writes this block -->"
+RESIDUAL_END = "<!-- residual-study:end -->"
+RESIDUAL_DOC = ROOT / "docs" / "residual.md"
 
 
 @functools.cache
@@ -98,9 +103,8 @@ def rule_study_summary() -> dict[str, Any]:
     applied: a condition whose runs the rule still asks for is left out."""
     from pursuit_bench.study import rule_report, rule_study
 
-    about = json.loads((RULE_STUDY / "rule-study.json").read_text())
     runs = rule_study.read_runs(RULE_STUDY / "runs")
-    return rule_report.summarise(runs, seed_rule=rule_report.seed_rule_of(about))
+    return rule_report.summarise(runs, seed_rule=rule_report.study_of(RULE_STUDY)["seed_rule"])
 
 
 def answer() -> dict[str, Any]:
@@ -228,6 +232,31 @@ def study_block(counts: dict[str, Any]) -> str:
     return "\n".join([STUDY_BEGIN, _paragraph(counts), "", tables, STUDY_END])
 
 
+def residual_block() -> str:
+    """docs/residual.md's generated block: the residual study's report
+    (``pursuit-bench report results/residual-study``'s residual-study.md, its headings one level
+    down) over the settings whose runs are all in, led by what is not judged yet; before any
+    setting is complete, only that."""
+    from pursuit_bench.study import rule_report, rule_study
+
+    study = rule_report.study_of(RESIDUAL_STUDY, "residual-study")
+    runs = rule_study.read_runs(RESIDUAL_STUDY / "runs")
+    done, waiting = rule_report.complete_settings(runs, study["kinds"], study["seed_rule"])
+    if not done:
+        under_way = "; ".join(f"{c} ({rule_report.runs_held(by)})" for c, by in waiting.items()) or "none"
+        text = (
+            f"**Nothing judged yet**: no setting holds every run its seed rule asks for, of all three kinds "
+            f"({len(runs)} judged runs evaluated so far; settings under way: {under_way}). This page makes no "
+            "claim about how the residual predator compares until one does."
+        )
+        return "\n".join([RESIDUAL_BEGIN, textwrap.fill(text, 100, break_long_words=False), RESIDUAL_END])
+    summary = rule_report.summarise(
+        runs, kinds=study["kinds"], pairs=study["pairs"], differs=study["differs"], seed_rule=study["seed_rule"]
+    )
+    tables = ("\n" + rule_report.markdown(summary, study["differs"])).replace("\n## ", "\n### ").strip()
+    return "\n".join([RESIDUAL_BEGIN, tables, RESIDUAL_END])
+
+
 def _with_block(path: Path, begin: str, end: str, block: str) -> str:
     """``path``'s text with what lies between its ``begin`` and ``end`` markers (both included)
     replaced by ``block``; ValueError naming the file where a marker is missing or out of order."""
@@ -239,14 +268,16 @@ def _with_block(path: Path, begin: str, end: str, block: str) -> str:
 
 
 def write_answer() -> None:
-    """Rewrite the README's answer block and REPRODUCTION.md's rule-study block from the results:
-    both files checked before either is written, each written whole or not at all."""
+    """Rewrite the README's answer block, REPRODUCTION.md's rule-study block and docs/residual.md's
+    residual-study block from the results: every file checked before any is written, each written
+    whole or not at all."""
     from pursuit_bench.io.files import atomic_write_text
 
     counts = answer()
     texts = {
         ROOT / "README.md": _with_block(ROOT / "README.md", BEGIN, END, answer_block(counts)),
         ROOT / "REPRODUCTION.md": _with_block(ROOT / "REPRODUCTION.md", STUDY_BEGIN, STUDY_END, study_block(counts)),
+        RESIDUAL_DOC: _with_block(RESIDUAL_DOC, RESIDUAL_BEGIN, RESIDUAL_END, residual_block()),
     }
     for path, text in texts.items():
         atomic_write_text(path, text)
@@ -276,7 +307,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record-seeds", type=Path, nargs="+", default=None, help="Run folders of seeds 0–4.")
     parser.add_argument(
-        "--write-answer", action="store_true", help="Rewrite the README's and REPRODUCTION.md's rule-study blocks."
+        "--write-answer",
+        action="store_true",
+        help="Rewrite the README's answer, REPRODUCTION.md's rule-study block and docs/residual.md's study block.",
     )
     args = parser.parse_args()
     if args.write_answer:
@@ -300,6 +333,8 @@ def main() -> int:
         problems.append(f"README.md's answer is not what the results give (--write-answer):\n{answer_block(counts)}")
     if study_block(counts) not in (ROOT / "REPRODUCTION.md").read_text():
         problems.append("REPRODUCTION.md's rule-study block is not what the results give (--write-answer)")
+    if residual_block() not in RESIDUAL_DOC.read_text():
+        problems.append("docs/residual.md's residual-study block is not what the results give (--write-answer)")
     problems += [f"runs/demo/eval.json: {line}" for line in outside(trained, seeds)]
     for problem in problems:
         print(problem, file=sys.stderr)

@@ -54,6 +54,43 @@ def test_the_readme_s_answer_is_what_the_committed_results_give() -> None:
     assert panels == counts["all_panels"] - counts["running_panels"]
 
 
+def test_docs_residual_md_s_study_block_is_what_the_committed_results_give() -> None:
+    assert check_readme.residual_block() in check_readme.RESIDUAL_DOC.read_text()
+
+
+def test_the_residual_study_s_block_judges_only_the_settings_whose_runs_are_all_in(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from test_rule_report import KINDS3, PAIRS3, three_kind_runs
+
+    from pursuit_bench.study import rule_study
+
+    where = tmp_path / "residual-study"
+    (where / "runs").mkdir(parents=True)
+    about = {"kinds": list(KINDS3), "comparisons": [list(p) for p in PAIRS3], "differs": 0.05}
+    (where / "residual-study.json").write_text(json.dumps(about) + "\n")
+    monkeypatch.setattr(check_readme, "RESIDUAL_STUDY", where)
+    runs = [r for r in three_kind_runs(n=4) if r["name"] != "1p-high-obstacles4-flat-seed3"]
+    for run in runs:
+        extra = {k: run[k] for k in ("protocol", "episodes", "pool", "setting", "obstacles")}
+        rule_study.write_run(where / "runs", run["name"], run["condition"], run["kind"], run["seed"], "abc", extra)
+    block = check_readme.residual_block()
+    assert block.startswith(check_readme.RESIDUAL_BEGIN) and block.endswith(check_readme.RESIDUAL_END)
+    assert "1p-high-obstacles4 (4 hierarchical, 4 residual, 3 flat)" in block  # under way, named, not judged
+    assert "### Primary: the pool return at 15000 episodes" in block
+    primary = block.split("### Primary", 1)[1].split("###", 1)[0]
+    assert "| 1p-high | predator_0 |" in primary and "1p-high-obstacles4 |" not in primary
+    for path in (where / "runs").glob("1p-high-*"):  # only the incomplete setting's runs
+        if "obstacles4" in path.name:
+            continue
+        path.unlink()
+    for path in (where / "runs").glob("2p-high-individual-*"):
+        path.unlink()
+    block = " ".join(check_readme.residual_block().split())  # a paragraph wrapped at 100 characters
+    assert "**Nothing judged yet**" in block and "1p-high-obstacles4 (4 hierarchical, 4 residual, 3 flat)" in block
+    assert "### Primary" not in block
+
+
 def test_the_answer_blocks_are_written_only_between_their_markers(tmp_path: Path) -> None:
     page = tmp_path / "page.md"
     page.write_text(f"before\n{check_readme.BEGIN}\nold\n{check_readme.END}\nafter\n")

@@ -81,19 +81,11 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
     from the judged runs' compact results (runs/)."""
     from pursuit_bench.study import rule_report
 
-    kinds, pairs, differs = rule_report.KINDS, rule_report.PAIRS, rule_report.statistics.EQUIVALENCE_MARGIN
-    marker = where / f"{stem}.json"
-    expected = "a seed rule if any" if stem == "rule-study" else "kinds and comparisons, and a seed rule if any"
     try:
-        about = json.loads(marker.read_text())
-        if stem != "rule-study":
-            kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
-            differs = float(about.get("differs", differs))
-        seed_rule = rule_report.seed_rule_of(about, kinds)
-    except (ValueError, KeyError, TypeError, AttributeError) as error:
-        raise BadInput(f"{marker}: expected {expected} ({error})") from None
-    try:
-        summary = rule_report.write_report(where, out, stem, kinds, pairs, differs, seed_rule)
+        study = rule_report.study_of(where, stem)
+        summary = rule_report.write_report(
+            where, out, stem, study["kinds"], study["pairs"], study["differs"], study["seed_rule"]
+        )
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")

@@ -245,6 +245,25 @@ def seed_rule_of(about: dict[str, Any], kinds: tuple[str, ...] = KINDS) -> SeedR
     return wanted
 
 
+def study_of(where: Path, stem: str = "rule-study") -> dict[str, Any]:
+    """What a study folder's marker (``<stem>.json``) says its report is: ``kinds``, ``pairs``
+    (the comparisons), ``differs`` and ``seed_rule`` (:func:`seed_rule_of`). The rule study's
+    marker records a seed rule at most (its kinds and comparison are the module's); another
+    study's names its kinds and comparisons. ValueError naming the marker for another form."""
+    marker = where / f"{stem}.json"
+    expected = "a seed rule if any" if stem == "rule-study" else "kinds and comparisons, and a seed rule if any"
+    try:
+        about = json.loads(marker.read_text())
+        kinds, pairs, differs = KINDS, PAIRS, statistics.EQUIVALENCE_MARGIN
+        if stem != "rule-study":
+            kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
+            differs = float(about.get("differs", differs))
+        seed_rule = seed_rule_of(about, kinds)
+    except (ValueError, KeyError, TypeError, AttributeError) as error:
+        raise ValueError(f"{marker}: expected {expected} ({error})") from None
+    return {"kinds": kinds, "pairs": pairs, "differs": differs, "seed_rule": seed_rule}
+
+
 def complete_settings(
     runs: list[dict[str, Any]], kinds: tuple[str, ...] = KINDS, seed_rule: SeedRule | None = None
 ) -> tuple[list[dict[str, Any]], dict[str, dict[str, int]]]:
@@ -504,7 +523,7 @@ def counts_line(counts: dict[str, int]) -> str:
     return ", ".join(f"{n} {v}" for v, n in counts.items())
 
 
-def _held(by: dict[str, int]) -> str:
+def runs_held(by: dict[str, int]) -> str:
     """A setting in progress: its runs per kind, and the seed rule's count where it asks for more."""
     held = ", ".join(f"{n} {k}" for k, n in by.items() if k != "wanted")
     return held + (f", of the {by['wanted']} a kind the seed rule asks for" if "wanted" in by else "")
@@ -533,7 +552,7 @@ def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MA
             corrections_markdown(s["corrections"], differs),
         ]
     if summary.get("in_progress"):
-        waiting = "; ".join(f"{c} ({_held(by)})" for c, by in summary["in_progress"].items())
+        waiting = "; ".join(f"{c} ({runs_held(by)})" for c, by in summary["in_progress"].items())
         extra_top = [f"**Not yet judged** (their runs are still being trained or evaluated; left out): {waiting}.", ""]
     else:
         extra_top = []
