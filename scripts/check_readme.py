@@ -104,7 +104,7 @@ def rule_study_summary() -> dict[str, Any]:
     from pursuit_bench.study import rule_report, rule_study
 
     runs = rule_study.read_runs(RULE_STUDY / "runs")
-    return rule_report.summarise(runs, seed_rule=rule_report.study_of(RULE_STUDY)["seed_rule"])
+    return rule_report.summarise(runs, seed_rule=rule_report.study_of(RULE_STUDY).seed_rule)
 
 
 def answer() -> dict[str, Any]:
@@ -241,19 +241,22 @@ def residual_block() -> str:
 
     study = rule_report.study_of(RESIDUAL_STUDY, "residual-study")
     runs = rule_study.read_runs(RESIDUAL_STUDY / "runs")
-    done, waiting = rule_report.complete_settings(runs, study["kinds"], study["seed_rule"])
+    done, waiting = rule_report.complete_settings(runs, study.kinds, study.seed_rule)
     if not done:
-        under_way = "; ".join(f"{c} ({rule_report.runs_held(by)})" for c, by in waiting.items()) or "none"
+        settings = json.loads((RESIDUAL_STUDY / "residual-study.json").read_text()).get("settings", {})
+        not_begun = [s for s in settings if s not in waiting]
         text = (
-            f"**Nothing judged yet**: no setting holds every run its seed rule asks for, of all three kinds "
-            f"({len(runs)} judged runs evaluated so far; settings under way: {under_way}). This page makes no "
-            "claim about how the residual predator compares until one does."
+            f"**Nothing judged yet**: no setting holds every run its seed rule asks for, of all "
+            f"{len(study.kinds)} kinds. Committed so far: {len(runs)} judged run{'' if len(runs) == 1 else 's'}"
+            f"{'; under way: ' + rule_report.in_progress_text(waiting) if waiting else ''}"
+            f"{'; none yet of ' + ', '.join(not_begun) if not_begun else ''}. This page makes no claim about "
+            "how the residual predator compares until one does."
         )
         return "\n".join([RESIDUAL_BEGIN, textwrap.fill(text, 100, break_long_words=False), RESIDUAL_END])
     summary = rule_report.summarise(
-        runs, kinds=study["kinds"], pairs=study["pairs"], differs=study["differs"], seed_rule=study["seed_rule"]
+        runs, kinds=study.kinds, pairs=study.pairs, differs=study.differs, seed_rule=study.seed_rule
     )
-    tables = ("\n" + rule_report.markdown(summary, study["differs"])).replace("\n## ", "\n### ").strip()
+    tables = ("\n" + rule_report.markdown(summary, study.differs)).replace("\n## ", "\n### ").strip()
     return "\n".join([RESIDUAL_BEGIN, tables, RESIDUAL_END])
 
 

@@ -56,16 +56,19 @@ def test_the_population_is_disjoint_from_the_judged_runs_and_holds_no_twins() ->
 
 
 def test_the_committed_populations_follow_the_design() -> None:
-    """Whatever population the study has committed: per setting the members the design names; the
+    """Every setting's committed population: the members the design names; the
     rule study's members of a plain setting byte for byte the rule study's files; every learned
     member's header saying its seed, condition, obstacles and kind; no two members with the same
     weights."""
     populations = ROOT / "pursuit_bench" / "pretrained" / "populations"
     for setting in design.SETTINGS:
         folder = populations / design.population_name(setting) / design.condition_of(setting)
-        if not (folder / "population.json").exists():
-            continue
-        members = json.loads((folder / "population.json").read_text())["members"]
+        document = json.loads((folder / "population.json").read_text())  # all six are committed
+        assert (document["condition"], document["obstacles"]) == (
+            design.condition_of(setting),
+            design.obstacles_of(setting),
+        )
+        members = document["members"]
         assert [m["name"] for m in members] == [m["name"] for m in design.members(setting)], setting
         seen: list[np.ndarray] = []
         for member in members:

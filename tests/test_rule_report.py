@@ -337,6 +337,8 @@ def test_three_kinds_are_compared_pairwise_in_one_holm_family_a_budget() -> None
 def test_the_residual_study_s_folder_is_reported_by_the_command(tmp_path: Path) -> None:
     where = tmp_path / "residual-study"
     where.mkdir()
+    with pytest.raises(ValueError, match=r"residual-study\.json: cannot be read"):
+        rule_report.study_of(where, "residual-study")
     about = {"kinds": list(KINDS3), "comparisons": [list(p) for p in PAIRS3], "differs": 0.05}
     (where / "residual-study.json").write_text(json.dumps(about) + "\n")
     code, output = run_cli("report", str(where))  # the study's marker, no run yet: its own folder named

@@ -83,9 +83,7 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
 
     try:
         study = rule_report.study_of(where, stem)
-        summary = rule_report.write_report(
-            where, out, stem, study["kinds"], study["pairs"], study["differs"], study["seed_rule"]
-        )
+        summary = rule_report.write_report(where, out, stem, study.kinds, study.pairs, study.differs, study.seed_rule)
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")

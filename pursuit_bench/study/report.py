@@ -188,7 +188,7 @@ def panel_table(results: list[RunResult]) -> list[dict[str, Any]]:
             variants = {k: variants[k] for k in order}  # trained kinds first, then the baselines
             entry: dict[str, Any] = {"condition": condition, "predator": predator, "variants": variants}
             top = max(v["mean"] for v in variants.values())
-            leaders = [k for k, v in variants.items() if v["mean"] == top]
+            leaders = [k for k, v in variants.items() if top - v["mean"] <= statistics.TIE]
             entry["best"] = leaders[0] if len(leaders) == 1 else "tie"
             if reference == "hierarchical" and all(b in variants for b in BASELINES):
                 ours = np.array(variants["hierarchical"]["values"])
@@ -282,7 +282,7 @@ def strict_counts(table: list[dict[str, Any]]) -> dict[str, Any]:
             v = t["variants"]
             i = v["hierarchical"]["seeds"].index(seed)
             ours = v["hierarchical"]["values"][i]
-            wins += all(ours > v[b]["values"][i] for b in BASELINES)
+            wins += all(ours > v[b]["values"][i] + statistics.TIE for b in BASELINES)
         counts.append(wins)
     values = np.array(counts, dtype=float)
     return {

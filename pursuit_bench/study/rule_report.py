@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -245,11 +246,24 @@ def seed_rule_of(about: dict[str, Any], kinds: tuple[str, ...] = KINDS) -> SeedR
     return wanted
 
 
-def study_of(where: Path, stem: str = "rule-study") -> dict[str, Any]:
-    """What a study folder's marker (``<stem>.json``) says its report is: ``kinds``, ``pairs``
-    (the comparisons), ``differs`` and ``seed_rule`` (:func:`seed_rule_of`). The rule study's
-    marker records a seed rule at most (its kinds and comparison are the module's); another
-    study's names its kinds and comparisons. ValueError naming the marker for another form."""
+@dataclass(frozen=True)
+class Study:
+    """What a study folder's marker says its report is."""
+
+    kinds: tuple[str, ...]
+    """The kinds its runs are of."""
+    pairs: list[tuple[str, str]]
+    """The comparisons it tests, (first, second): first − second."""
+    differs: float
+    """How far a residual run's margin must lie from its hierarchical twin's to differ."""
+    seed_rule: SeedRule | None
+    """Its seed rule (:func:`seed_rule_of`), None where it records none."""
+
+
+def study_of(where: Path, stem: str = "rule-study") -> Study:
+    """A study folder's marker (``<stem>.json``) read. The rule study's records a seed rule at
+    most (its kinds and comparison are this module's); another study's names its kinds and
+    comparisons. ValueError naming the marker where it is missing or of another form."""
     marker = where / f"{stem}.json"
     expected = "a seed rule if any" if stem == "rule-study" else "kinds and comparisons, and a seed rule if any"
     try:
@@ -258,10 +272,11 @@ def study_of(where: Path, stem: str = "rule-study") -> dict[str, Any]:
         if stem != "rule-study":
             kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
             differs = float(about.get("differs", differs))
-        seed_rule = seed_rule_of(about, kinds)
+        return Study(kinds, pairs, differs, seed_rule_of(about, kinds))
+    except OSError as error:
+        raise ValueError(f"{marker}: cannot be read ({error.strerror or error})") from None
     except (ValueError, KeyError, TypeError, AttributeError) as error:
         raise ValueError(f"{marker}: expected {expected} ({error})") from None
-    return {"kinds": kinds, "pairs": pairs, "differs": differs, "seed_rule": seed_rule}
 
 
 def complete_settings(
@@ -418,7 +433,9 @@ def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[
                 "corrected": {p: c["corrected"] for p, c in run["corrections"].items()},
                 "by_distance": {p: c["correction_by_distance"] for p, c in run["corrections"].items()},
             }
-            row["differs"] = None if twin is None else abs(row["margin"] - row["hierarchical_margin"]) > differs
+            row["differs"] = (
+                None if twin is None else abs(row["margin"] - row["hierarchical_margin"]) > differs + statistics.TIE
+            )
             rows.append(row)
     return rows
 
@@ -523,7 +540,13 @@ def counts_line(counts: dict[str, int]) -> str:
     return ", ".join(f"{n} {v}" for v, n in counts.items())
 
 
-def runs_held(by: dict[str, int]) -> str:
+def in_progress_text(waiting: dict[str, dict[str, int]]) -> str:
+    """The settings still running, each with its runs per kind: ``3p-low-individual (10
+    hierarchical, 10 residual, 10 flat, of the 30 a kind the seed rule asks for); …``."""
+    return "; ".join(f"{c} ({_held(by)})" for c, by in waiting.items())
+
+
+def _held(by: dict[str, int]) -> str:
     """A setting in progress: its runs per kind, and the seed rule's count where it asks for more."""
     held = ", ".join(f"{n} {k}" for k, n in by.items() if k != "wanted")
     return held + (f", of the {by['wanted']} a kind the seed rule asks for" if "wanted" in by else "")
@@ -552,7 +575,7 @@ def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MA
             corrections_markdown(s["corrections"], differs),
         ]
     if summary.get("in_progress"):
-        waiting = "; ".join(f"{c} ({runs_held(by)})" for c, by in summary["in_progress"].items())
+        waiting = in_progress_text(summary["in_progress"])
         extra_top = [f"**Not yet judged** (their runs are still being trained or evaluated; left out): {waiting}.", ""]
     else:
         extra_top = []

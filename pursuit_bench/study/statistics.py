@@ -27,6 +27,13 @@ CONFIDENCE = 0.95
 #: interval, so a comparison is called better (or worse) exactly when its interval, widened
 #: for the family by Holm's procedure, excludes zero on that side.
 ALPHA = 0.025
+
+#: Two measures closer than this are equal. A run's measures are means of episode returns summed
+#: in different orders, so values equal in exact arithmetic can differ in their last bits (a pool
+#: margin of exactly 0 came out as -2.8e-17): a comparison with a line or another run must not
+#: read that as a difference.
+TIE = 1e-12
+
 RESAMPLES = 2000
 #: The equivalence margin of every four-verdict table, in return per episode (a capture is worth
 #: 1): five captures in a hundred episodes, the larger of the reproduction's power margins
@@ -84,7 +91,8 @@ def paired_difference(
     sd = float(d.std(ddof=1)) if n > 1 else float("nan")
     if n < 2:
         t, p_greater = float("nan"), float("nan")
-    elif sd == 0:
+    elif sd <= TIE:  # no spread (but for the last bits of sums taken in different orders)
+        mean = 0.0 if abs(mean) <= TIE else mean
         t = float(np.sign(mean) * np.inf) if mean != 0 else 0.0
         p_greater = 0.0 if mean > 0 else 1.0 if mean < 0 else 0.5
     else:
@@ -115,8 +123,8 @@ def welch_difference(
     mean = float(a.mean() - b.mean())
     va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
     se = float(np.sqrt(va + vb))
-    if se == 0:
-        return {"mean": mean, "ci": [mean, mean], "p": 1.0 if mean == 0 else 0.0, "df": float("nan")}
+    if se <= TIE:  # no spread (but for the last bits)
+        return {"mean": mean, "ci": [mean, mean], "p": 1.0 if abs(mean) <= TIE else 0.0, "df": float("nan")}
     df = float((va + vb) ** 2 / (va**2 / (len(a) - 1) + vb**2 / (len(b) - 1)))
     half = float(stats.t.ppf(0.5 + confidence / 2, df) * se)
     p = float(2 * stats.t.sf(abs(mean) / se, df))
@@ -127,8 +135,8 @@ def _tost_p(mean: float, se: float, df: float, margin: float) -> float:
     """The larger of the two one-sided t-test p-values that a difference of ``mean`` (standard
     error ``se``, ``df`` degrees of freedom) lies above ``-margin`` and below ``+margin``; with no
     spread, 0 inside the margin and 1 outside."""
-    if se == 0:
-        return 0.0 if abs(mean) < margin else 1.0
+    if se <= TIE:
+        return 0.0 if abs(mean) < margin - TIE else 1.0
     above = float(stats.t.sf((mean + margin) / se, df))  # H0: difference <= -margin
     below = float(stats.t.cdf((mean - margin) / se, df))  # H0: difference >= +margin
     return max(above, below)
@@ -264,13 +272,6 @@ def detectable(sd: float, n: int, alpha: float = ALPHA, power: float = 0.8) -> f
     return float(hi * sd / np.sqrt(n))
 
 
-#: Two measures closer than this are equal. A run's measures are means of episode returns summed
-#: in different orders, so values equal in exact arithmetic can differ in their last bits (a pool
-#: margin of exactly 0 came out as -2.8e-17): a comparison with a line or another run must not
-#: read that as a difference.
-TIE = 1e-12
-
-
 def _pairs_above(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """The share of pairs (x_i, y_j) with x_i > y_j, ties (within :data:`TIE`) half, over the last
     axis of each (leading axes: resamples)."""
@@ -371,8 +372,9 @@ def share_difference(count_a: int, n_a: int, count_b: int, n_b: int) -> dict[str
     powerful than Fisher's at these counts, and exact: no large-sample approximation).
 
     SciPy's ``boschloo_exact`` takes each *column* of the 2×2 table as one binomial sample, so the
-    kinds are the columns (a table with the kinds as rows tests whether failures and successes
-    have the same share of kind a: another question, other p-values)."""
+    kinds are the columns. With the kinds as rows the null is the same but the sampling model is
+    not the study's (the totals of failures and successes fixed, not the runs of each kind), and
+    the p-values are not this design's exact test's."""
     table = [[count_a, count_b], [n_a - count_a, n_b - count_b]]
     p = 1.0 if count_a + count_b in (0, n_a + n_b) else float(stats.boschloo_exact(table).pvalue)
     return {"difference": count_a / n_a - count_b / n_b, "p": min(1.0, p)}
