@@ -212,9 +212,14 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
     return sentences
 
 
+def _wrapped(text: str) -> str:
+    """``text`` as one paragraph wrapped at 100 characters, never inside a word or a name."""
+    return textwrap.fill(text, 100, break_long_words=False, break_on_hyphens=False)
+
+
 def _paragraph(counts: dict[str, Any]) -> str:
     """The answer's sentences as one paragraph, wrapped at 100 characters."""
-    return textwrap.fill(" ".join(answer_sentences(counts)), 100, break_long_words=False, break_on_hyphens=False)
+    return _wrapped(" ".join(answer_sentences(counts)))
 
 
 def answer_block(counts: dict[str, Any]) -> str:
@@ -242,9 +247,10 @@ def residual_block() -> str:
     study = rule_report.study_of(RESIDUAL_STUDY, "residual-study")
     runs = rule_study.read_runs(RESIDUAL_STUDY / "runs")
     done, waiting = rule_report.complete_settings(runs, study.kinds, study.seed_rule)
+    settings = json.loads((RESIDUAL_STUDY / "residual-study.json").read_text()).get("settings", {})
+    held = {rule_report.setting_of(r) for r in runs}
+    not_begun = [s for s in settings if s not in held]
     if not done:
-        settings = json.loads((RESIDUAL_STUDY / "residual-study.json").read_text()).get("settings", {})
-        not_begun = [s for s in settings if s not in waiting]
         text = (
             f"**Nothing judged yet**: no setting holds every run its seed rule asks for, of all "
             f"{len(study.kinds)} kinds. Committed so far: {len(runs)} judged run{'' if len(runs) == 1 else 's'}"
@@ -252,11 +258,20 @@ def residual_block() -> str:
             f"{'; none yet of ' + ', '.join(not_begun) if not_begun else ''}. This page makes no claim about "
             "how the residual predator compares until one does."
         )
-        return "\n".join([RESIDUAL_BEGIN, textwrap.fill(text, 100, break_long_words=False), RESIDUAL_END])
+        return "\n".join([RESIDUAL_BEGIN, _wrapped(text), RESIDUAL_END])
     summary = rule_report.summarise(
         runs, kinds=study.kinds, pairs=study.pairs, differs=study.differs, seed_rule=study.seed_rule
     )
     tables = ("\n" + rule_report.markdown(summary, study.differs)).replace("\n## ", "\n### ").strip()
+    judged = list(dict.fromkeys(rule_report.setting_of(r) for r in done))
+    if len(judged) < len(settings):
+        panels = len(summary["primary"]["panels"])
+        lead = (
+            f"**Interim: {len(judged)} of the {len(settings)} settings judged** ({', '.join(judged)}). Holm runs "
+            f"over their {panels} tests, not over every setting's, so a verdict can change as settings join"
+            f"{'; no run committed yet of ' + ', '.join(not_begun) if not_begun else ''}."
+        )
+        tables = _wrapped(lead) + "\n\n" + tables
     return "\n".join([RESIDUAL_BEGIN, tables, RESIDUAL_END])
 
 

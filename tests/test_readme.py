@@ -68,6 +68,7 @@ def test_the_residual_study_s_block_judges_only_the_settings_whose_runs_are_all_
     where = tmp_path / "residual-study"
     (where / "runs").mkdir(parents=True)
     about = {"kinds": list(KINDS3), "comparisons": [list(p) for p in PAIRS3], "differs": 0.05}
+    about["settings"] = {s: {} for s in ("1p-high", "1p-high-obstacles4", "2p-high-individual", "3p-high-shared")}
     (where / "residual-study.json").write_text(json.dumps(about) + "\n")
     monkeypatch.setattr(check_readme, "RESIDUAL_STUDY", where)
     runs = [r for r in three_kind_runs(n=4) if r["name"] != "1p-high-obstacles4-flat-seed3"]
@@ -77,6 +78,9 @@ def test_the_residual_study_s_block_judges_only_the_settings_whose_runs_are_all_
     block = check_readme.residual_block()
     assert block.startswith(check_readme.RESIDUAL_BEGIN) and block.endswith(check_readme.RESIDUAL_END)
     assert "1p-high-obstacles4 (4 hierarchical, 4 residual, 3 flat)" in block  # under way, named, not judged
+    lead = " ".join(block.split("### Primary", 1)[0].split())
+    assert "**Interim: 2 of the 4 settings judged** (1p-high, 2p-high-individual)" in lead
+    assert "no run committed yet of 3p-high-shared." in lead
     assert "### Primary: the pool return at 15000 episodes" in block
     primary = block.split("### Primary", 1)[1].split("###", 1)[0]
     assert "| 1p-high | predator_0 |" in primary and "1p-high-obstacles4 |" not in primary
@@ -167,11 +171,12 @@ def test_every_python_block_of_the_readme_and_of_use_md_runs_as_written(tmp_path
 
 
 @pytest.mark.long
-def test_the_rule_study_s_committed_report_regenerates_byte_for_byte(tmp_path: Path) -> None:
-    """docs/figures/rule-study/ (REPRODUCTION.md's figure, and the report its block quotes) is what
-    `pursuit-bench report results/rule-study` writes from the committed results."""
-    code, output = run_cli("report", str(check_readme.RULE_STUDY), "--out", str(tmp_path))
+@pytest.mark.parametrize("stem", ["rule-study", "residual-study"])
+def test_a_study_s_committed_report_regenerates_byte_for_byte(tmp_path: Path, stem: str) -> None:
+    """docs/figures/<stem>/ (REPRODUCTION.md's or docs/residual.md's figure, and the report its
+    block quotes) is what `pursuit-bench report results/<stem>` writes from the committed results."""
+    code, output = run_cli("report", str(check_readme.ROOT / "results" / stem), "--out", str(tmp_path))
     assert code == 0, output
-    committed = check_readme.ROOT / "docs" / "figures" / "rule-study"
-    for name in ("rule-study-report.json", "rule-study.md", "rule-study.png"):
+    committed = check_readme.ROOT / "docs" / "figures" / stem
+    for name in (f"{stem}-report.json", f"{stem}.md", f"{stem}.png"):
         assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name
