@@ -247,9 +247,8 @@ def residual_block() -> str:
     study = rule_report.study_of(RESIDUAL_STUDY, "residual-study")
     runs = rule_study.read_runs(RESIDUAL_STUDY / "runs")
     done, waiting = rule_report.complete_settings(runs, study.kinds, study.seed_rule)
-    settings = json.loads((RESIDUAL_STUDY / "residual-study.json").read_text()).get("settings", {})
     held = {rule_report.setting_of(r) for r in runs}
-    not_begun = [s for s in settings if s not in held]
+    not_begun = [s for s in study.settings if s not in held]
     if not done:
         text = (
             f"**Nothing judged yet**: no setting holds every run its seed rule asks for, of all "
@@ -264,10 +263,10 @@ def residual_block() -> str:
     )
     tables = ("\n" + rule_report.markdown(summary, study.differs)).replace("\n## ", "\n### ").strip()
     judged = list(dict.fromkeys(rule_report.setting_of(r) for r in done))
-    if len(judged) < len(settings):
+    if len(judged) < len(study.settings):
         panels = len(summary["primary"]["panels"])
         lead = (
-            f"**Interim: {len(judged)} of the {len(settings)} settings judged** ({', '.join(judged)}). Holm runs "
+            f"**Interim: {len(judged)} of the {len(study.settings)} settings judged** ({', '.join(judged)}). Holm runs "
             f"over their {panels} tests, not over every setting's, so a verdict can change as settings join"
             f"{'; no run committed yet of ' + ', '.join(not_begun) if not_begun else ''}."
         )

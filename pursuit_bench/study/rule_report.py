@@ -258,6 +258,8 @@ class Study:
     """How far a residual run's margin must lie from its hierarchical twin's to differ."""
     seed_rule: SeedRule | None
     """Its seed rule (:func:`seed_rule_of`), None where it records none."""
+    settings: tuple[str, ...] = ()
+    """The settings it names, in its order (none named: the rule study's marker)."""
 
 
 def study_of(where: Path, stem: str = "rule-study") -> Study:
@@ -272,7 +274,7 @@ def study_of(where: Path, stem: str = "rule-study") -> Study:
         if stem != "rule-study":
             kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
             differs = float(about.get("differs", differs))
-        return Study(kinds, pairs, differs, seed_rule_of(about, kinds))
+        return Study(kinds, pairs, differs, seed_rule_of(about, kinds), tuple(about.get("settings", {})))
     except OSError as error:
         raise ValueError(f"{marker}: cannot be read ({error.strerror or error})") from None
     except (ValueError, KeyError, TypeError, AttributeError) as error:
