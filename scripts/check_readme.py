@@ -267,7 +267,10 @@ def residual_block() -> str:
         panels = len(summary["primary"]["panels"])
         lead = (
             f"**Interim: {len(judged)} of the {len(study.settings)} settings judged** ({', '.join(judged)}). Holm runs "
-            f"over their {panels} tests, not over every setting's, so a verdict can change as settings join"
+            f"over their {panels} tests (the ladders' families likewise over these settings), not over the protocol's "
+            "families of every setting; adding tests can only raise an adjusted p, so the final verdicts can be "
+            "weaker than these, never stronger (better or worse can fall to equivalent or not resolved, "
+            "equivalent to not resolved)"
             f"{'; no run committed yet of ' + ', '.join(not_begun) if not_begun else ''}."
         )
         tables = _wrapped(lead) + "\n\n" + tables

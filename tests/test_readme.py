@@ -3,6 +3,7 @@ and the training run's spread over seeds from its committed source file."""
 
 import gzip
 import json
+import math
 import re
 import subprocess
 import sys
@@ -170,13 +171,34 @@ def test_every_python_block_of_the_readme_and_of_use_md_runs_as_written(tmp_path
         assert done.returncode == 0, f"{script}\n{done.stderr}"
 
 
+def _close(a: object, b: object) -> bool:
+    """Two JSON values alike, floats to 1e-12 relative: dicts with the same keys, lists of the
+    same length, everything else equal."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, float) and isinstance(b, float):
+        return math.isclose(a, b, rel_tol=1e-12)
+    return type(a) is type(b) and a == b
+
+
 @pytest.mark.long
 @pytest.mark.parametrize("stem", ["rule-study", "residual-study"])
-def test_a_study_s_committed_report_regenerates_byte_for_byte(tmp_path: Path, stem: str) -> None:
-    """docs/figures/<stem>/ (REPRODUCTION.md's or docs/residual.md's figure, and the report its
-    block quotes) is what `pursuit-bench report results/<stem>` writes from the committed results."""
+def test_a_study_s_committed_report_regenerates(tmp_path: Path, stem: str) -> None:
+    """docs/figures/<stem>/ (REPRODUCTION.md's or docs/residual.md's figures, and the report its
+    block quotes) is what `pursuit-bench report results/<stem>` writes from the committed results:
+    the tables and figures byte for byte; the JSON's numbers to 1e-12 relative, since SciPy's
+    Boschloo p-values (a numerical maximisation) differ in their last bits from one CPU to another
+    (seen: 0.3662940152851117 on one machine, 0.36629401528511163 on the next)."""
     code, output = run_cli("report", str(check_readme.ROOT / "results" / stem), "--out", str(tmp_path))
     assert code == 0, output
     committed = check_readme.ROOT / "docs" / "figures" / stem
-    for name in (f"{stem}-report.json", f"{stem}.md", f"{stem}.png"):
-        assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name
+    names = [f"{stem}-report.json", f"{stem}.md", f"{stem}.png"]
+    if (tmp_path / f"{stem}-corrections.png").exists() or (committed / f"{stem}-corrections.png").exists():
+        names.append(f"{stem}-corrections.png")  # a study with a residual kind's corrections
+    for name in names:
+        if name.endswith(".json"):
+            assert _close(json.loads((tmp_path / name).read_text()), json.loads((committed / name).read_text())), name
+        else:
+            assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name

@@ -87,7 +87,8 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
     except ValueError as error:
         raise BadInput(str(error)) from None
     click.echo(f"primary, {summary['primary']['measure']}: {rule_report.counts_line(summary['primary']['counts'])}")
-    click.echo(f"written in {out}: {stem}-report.json, {stem}.md, {stem}.png")
+    corrections = f", {stem}-corrections.png" if summary["secondary"].get("corrections") else ""
+    click.echo(f"written in {out}: {stem}-report.json, {stem}.md, {stem}.png{corrections}")
 
 
 def _report_run(folder: Path, out: Path) -> None:

@@ -646,3 +646,69 @@ def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     )
     fig.tight_layout()
     return _png(fig)
+
+
+#: A distance bin of a run with fewer states than this is left out of the corrections figure.
+FEWEST_STATES = 10
+
+
+def correction_shares(by_predator: dict[str, Any], mode: str) -> tuple[np.ndarray, np.ndarray]:
+    """A residual run's corrected states and all its states in ``mode``, per distance bin, over its
+    predators together (``analyze``'s ``correction_by_distance`` of each)."""
+    corrected = states = None
+    for entry in by_predator.values():
+        n = np.array(entry[mode]["states"], dtype=float)
+        share = np.array([0.0 if s is None else s for s in entry[mode]["corrected"]])
+        corrected = np.rint(share * n) if corrected is None else corrected + np.rint(share * n)
+        states = n if states is None else states + n
+    assert corrected is not None and states is not None, "a run without predators"
+    return corrected, states
+
+
+def corrections_png(rows: list[dict[str, Any]], differs: float) -> bytes:
+    """Where the residual runs correct the rule: per setting (columns) and mode (rows), each run's
+    share of states whose greedy correction is not the rule's direction, by distance to the prey
+    (its predators' states together; bins of fewer than :data:`FEWEST_STATES` states left out).
+    A thin line per run, red where its pool margin differs from the hierarchical run of its seed by
+    more than ``differs``, grey where it does not; thick: each group's mean over runs."""
+    settings = list(dict.fromkeys(r["setting"] for r in rows))
+    modes = ("stalk", "chase")
+    width = max(3.0 * len(settings), 8.0)  # room for the title with one setting
+    fig, axes = plt.subplots(2, len(settings), figsize=(width, 6.0), squeeze=False, sharey=True)
+    groups = ((True, "#c44e52", "differs"), (False, "#8c8c8c", "does not differ"))
+    for column, setting in enumerate(settings):
+        for line, mode in enumerate(modes):
+            ax = axes[line, column]
+            for different, color, label in groups:
+                shares = []
+                for r in rows:
+                    if r["setting"] != setting or bool(r["differs"]) != different:
+                        continue
+                    bins = np.array(next(iter(r["by_distance"].values()))["bins"])
+                    centres = (bins[:-1] + bins[1:]) / 2
+                    corrected, states = correction_shares(r["by_distance"], mode)
+                    share = np.where(states >= FEWEST_STATES, corrected / np.maximum(states, 1), np.nan)
+                    shares.append(share)
+                    ax.plot(centres, share, color=color, lw=0.6, alpha=0.5)
+                if shares:
+                    with np.errstate(all="ignore"):
+                        counted = np.sum(~np.isnan(shares), axis=0)
+                        mean = np.where(counted > 0, np.nansum(shares, axis=0) / np.maximum(counted, 1), np.nan)
+                    ax.plot(centres, mean, color=color, lw=2.2, label=f"{label} ({len(shares)} runs)")
+            ax.set_ylim(-0.02, 1.02)
+            ax.tick_params(labelsize=7)
+            ax.set_title(f"{setting}: {mode}", fontsize=9)
+            if column == 0:
+                ax.set_ylabel("share of states corrected", fontsize=8)
+            if line == 1:
+                ax.set_xlabel("distance to the prey", fontsize=8)
+            if line == 0:
+                ax.legend(fontsize=7, loc="upper right")
+    fig.suptitle(
+        "Where the residual predator corrects the rule (greedy, at the end of training, against its own prey)\n"
+        "thin: one run (its predators together); thick: mean over the runs of a group\n"
+        f"red: its pool margin differs from the hierarchical run of its seed by more than {differs:g}",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    return _png(fig)

@@ -411,6 +411,19 @@ def ladders(runs: list[dict[str, Any]], kinds: tuple[str, str] = ("residual", "h
     return out
 
 
+def mean_turn(by_predator: dict[str, Any]) -> float | None:
+    """How far a residual run turns the rule where it corrects it: the mean of |k| × 30° over the
+    corrected states of all its predators (``analyze``'s counts of each correction), None if none."""
+    used: dict[int, int] = {}
+    for c in by_predator.values():
+        for k, n in c["correction_by_distance"]["used"].items():
+            used[int(k)] = used.get(int(k), 0) + int(n)
+    corrected = {k: n for k, n in used.items() if k != 0 and n > 0}
+    if not corrected:
+        return None
+    return 30.0 * sum(abs(k) * n for k, n in corrected.items()) / sum(corrected.values())
+
+
 def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[dict[str, Any]]:
     """Where and how much each residual run corrects the rule (secondary, descriptive): its pool
     margin at ``final`` (mean over its predators) beside that of the hierarchical run of its seed,
@@ -433,6 +446,7 @@ def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[
                 "margin": margin(run),
                 "hierarchical_margin": None if twin is None else margin(twin),
                 "corrected": {p: c["corrected"] for p, c in run["corrections"].items()},
+                "turn": mean_turn(run["corrections"]),
                 "by_distance": {p: c["correction_by_distance"] for p, c in run["corrections"].items()},
             }
             row["differs"] = (
@@ -528,13 +542,16 @@ def ladders_markdown(families: dict[str, Any]) -> str:
 def corrections_markdown(rows: list[dict[str, Any]], differs: float) -> str:
     lines = [
         f"| setting | seed | residual pool margin | hierarchical's, same seed | differs by more than {differs} "
-        "| states corrected (per predator) |",
-        "|---|---:|---:|---:|---|---|",
+        "| states corrected (per predator) | mean turn where corrected |",
+        "|---|---:|---:|---:|---|---|---:|",
     ]
     for r in sorted(rows, key=lambda r: (not r["differs"], r["setting"], r["seed"])):
         twin = "—" if r["hierarchical_margin"] is None else f"{r['hierarchical_margin']:+.3f}"
         shares = ", ".join(f"{v:.1%}" for v in r["corrected"].values())
-        lines.append(f"| {r['setting']} | {r['seed']} | {r['margin']:+.3f} | {twin} | {r['differs']} | {shares} |")
+        turn = "—" if r.get("turn") is None else f"{r['turn']:.0f}°"
+        lines.append(
+            f"| {r['setting']} | {r['seed']} | {r['margin']:+.3f} | {twin} | {r['differs']} | {shares} | {turn} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -544,14 +561,16 @@ def counts_line(counts: dict[str, int]) -> str:
 
 def in_progress_text(waiting: dict[str, dict[str, int]]) -> str:
     """The settings still running, each with its runs per kind: ``3p-low-individual (10
-    hierarchical, 10 residual, 10 flat, of the 30 a kind the seed rule asks for); …``."""
+    hierarchical, 10 residual, 10 flat, of the 30 a kind its seed rule (and floor, where it has one) asks for); …``."""
     return "; ".join(f"{c} ({_held(by)})" for c, by in waiting.items())
 
 
 def _held(by: dict[str, int]) -> str:
     """A setting in progress: its runs per kind, and the seed rule's count where it asks for more."""
     held = ", ".join(f"{n} {k}" for k, n in by.items() if k != "wanted")
-    return held + (f", of the {by['wanted']} a kind the seed rule asks for" if "wanted" in by else "")
+    if "wanted" not in by:
+        return held
+    return held + f", of the {by['wanted']} a kind its seed rule (and floor, where it has one) asks for"
 
 
 def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MARGIN) -> str:
@@ -633,10 +652,10 @@ def write_report(
     seed_rule: SeedRule | None = None,
 ) -> dict[str, Any]:
     """From the study's folder (``runs/*.json.gz``): ``<stem>-report.json``, ``<stem>.md`` and
-    ``<stem>.png`` in ``out`` (rule-study-…, or a study of ``kinds`` compared by ``pairs``);
-    returns the summary."""
+    ``<stem>.png`` in ``out`` (rule-study-…, or a study of ``kinds`` compared by ``pairs``), and
+    where the runs hold a residual kind's corrections ``<stem>-corrections.png``; returns the summary."""
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study.plots import pool_png
+    from pursuit_bench.study.plots import corrections_png, pool_png
 
     runs = rule_study.read_runs(where / "runs")
     if not runs:
@@ -654,4 +673,6 @@ def write_report(
         "budgets": [{"episodes": b} for b in summary["budgets"]],
     }
     atomic_write_bytes(out / f"{stem}.png", pool_png(figure, measure="pool return"))
+    if corrected := summary["secondary"].get("corrections"):
+        atomic_write_bytes(out / f"{stem}-corrections.png", corrections_png(corrected, differs))
     return summary
