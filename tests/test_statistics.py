@@ -285,3 +285,35 @@ def test_measures_equal_but_for_their_last_bits_are_ties() -> None:
     below = np.array([0.6, 0.2])
     # summed vs 0.6 is a tie (half); the other three pairs are clear wins
     assert statistics.probability_of_improvement([above], [below]) == pytest.approx(3.5 / 4)
+
+
+def _study_coverage():  # type: ignore[no-untyped-def]
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        import study_coverage
+    finally:
+        sys.path.remove(str(ROOT / "scripts"))
+    return study_coverage
+
+
+def test_a_study_s_coverage_check_finds_the_known_answers() -> None:
+    """scripts/study_coverage.py's resampled worlds: normal runs give Welch's interval about its
+    95 %; one run of 30 carrying the whole difference gives what counting says, since a draw
+    without it (probability (29/30)^30) has an interval of width 0 that misses the truth."""
+    study_coverage = _study_coverage()
+    rng = np.random.default_rng(5)
+    assert 0.93 <= study_coverage.welch_coverage(rng.normal(0, 1, 30), rng.normal(0.3, 2, 30), seed=0) <= 0.965
+    lonely = np.r_[np.zeros(29), 1.0]
+    expected = 1 - (29 / 30) ** 30
+    assert study_coverage.welch_coverage(lonely, np.zeros(30), seed=0) == pytest.approx(expected, abs=0.03)
+    assert 0.93 <= study_coverage.paired_coverage(rng.normal(0.1, 1, 30), seed=0) <= 0.965
+    assert study_coverage.paired_coverage(lonely, seed=0) == pytest.approx(expected, abs=0.03)
+
+
+@pytest.mark.long
+def test_the_residual_study_s_committed_coverage_is_what_its_script_gives() -> None:
+    """results/residual-study/interval-coverage.md (docs/residual.md cites it) is what
+    scripts/study_coverage.py computes from the committed runs (seeded)."""
+    study_coverage = _study_coverage()
+    committed = (ROOT / "results" / "residual-study" / "interval-coverage.md").read_text()
+    assert committed.endswith(study_coverage.tables(ROOT / "results" / "residual-study"))
