@@ -267,8 +267,10 @@ def residual_block() -> str:
         panels = len(summary["primary"]["panels"])
         lead = (
             f"**Interim: {len(judged)} of the {len(study.settings)} settings judged** ({', '.join(judged)}). Holm runs "
-            f"over their {panels} tests (the ladders' families likewise over these settings), not over the protocol's "
-            "families of every setting; adding tests can only raise an adjusted p, so the final verdicts can be "
+            f"over their {panels} tests, not over the protocol's family of every setting (each ladder's family "
+            "likewise over these settings' cells: final once every setting it runs in is judged, as the obstacles "
+            "ladder's is once the four plain settings are, the only ones it runs in); adding tests can only raise "
+            "an adjusted p, so the final verdicts can be "
             "weaker than these, never stronger (better or worse can fall to equivalent or not resolved, "
             "equivalent to not resolved)"
             f"{'; no run committed yet of ' + ', '.join(not_begun) if not_begun else ''}."
