@@ -1,6 +1,7 @@
 """The statistics module against hand computations, worked examples, scipy, and simulation."""
 
 import math
+import shutil
 import sys
 from pathlib import Path
 
@@ -317,3 +318,20 @@ def test_the_residual_study_s_committed_coverage_is_what_its_script_gives() -> N
     study_coverage = _study_coverage()
     committed = (ROOT / "results" / "residual-study" / "interval-coverage.md").read_text()
     assert committed.endswith(study_coverage.tables(ROOT / "results" / "residual-study"))
+
+
+@pytest.mark.long
+def test_a_study_s_coverage_rows_keep_their_values_as_settings_join(tmp_path: Path) -> None:
+    """Each row is seeded by its own names, not its place: 3p-low-individual's rows computed from
+    its runs alone are the rows the committed file (every judged setting) holds for it."""
+    study_coverage = _study_coverage()
+    source = ROOT / "results" / "residual-study"
+    alone = tmp_path / "residual-study"
+    (alone / "runs").mkdir(parents=True)
+    shutil.copy(source / "residual-study.json", alone)
+    for run in (source / "runs").glob("3p-low-individual-*.json.gz"):
+        shutil.copy(run, alone / "runs")
+    rows = [line for line in study_coverage.tables(alone).splitlines() if "| 3p-low-individual |" in line]
+    committed = (source / "interval-coverage.md").read_text().splitlines()
+    assert len(rows) == 6 + 9  # the primary's 3 panels x 2 comparisons, and 3 ladders x 3 rungs
+    assert rows == [line for line in committed if "| 3p-low-individual |" in line]
