@@ -661,10 +661,11 @@ def drive(args: Any, settings: list[str]) -> int:
     while True:
         waiting = population(args, stop, settings, current)
         states: list[str] = ["stop"] if waiting == ["stop"] else []
-        for setting in [] if waiting else settings:  # a stop ends the round: no next setting is begun
-            states.append(judged(args, stop, setting, current))
-            if states[-1] == "stop":
-                break
+        if not waiting:
+            for setting in settings:
+                states.append(judged(args, stop, setting, current))
+                if states[-1] == "stop":  # a stop ends the round: no next setting is begun
+                    break
         if stop[0] or "stop" in states:
             log(args.work, "stopped: rerun the same command to resume")
             return 143
