@@ -237,6 +237,75 @@ def study_block(counts: dict[str, Any]) -> str:
     return "\n".join([STUDY_BEGIN, _paragraph(counts), "", tables, STUDY_END])
 
 
+def _panels_named(rows: list[dict[str, Any]], every: dict[str, int]) -> str:
+    """The panels of ``rows`` by setting: ``1p-high``; ``every predator of 3p-low-individual``;
+    ``2p-high-individual predator_0``. ``every``: each setting's number of panels."""
+    by_setting: dict[str, list[str]] = {}
+    for row in rows:
+        by_setting.setdefault(row["condition"], []).append(row["predator"])
+    named = []
+    for setting, predators in by_setting.items():
+        if every[setting] == 1:
+            named.append(setting)
+        elif len(predators) == every[setting]:
+            named.append(f"every predator of {setting}")
+        else:
+            named.append(f"{setting} {' and '.join(predators)}")
+    return "; ".join(named)
+
+
+def residual_headline(summary: dict[str, Any]) -> str:
+    """What the study's report says, in sentences: each comparison's primary verdicts with the
+    panels named, then each robustness ladder's cells where the residual predator's margin changes
+    significantly more or less favourably than the hierarchical one's (Holm per ladder), settings named."""
+    panels = summary["primary"]["panels"]
+    first_pair = list(summary["comparisons"][0])
+    every: dict[str, int] = {}
+    for row in panels:
+        if row["pair"] == first_pair:
+            every[row["condition"]] = every.get(row["condition"], 0) + 1
+    parts = []
+    for first, second in summary["comparisons"]:
+        rows = [r for r in panels if r["pair"] == [first, second]]
+        verdicts = [
+            ("better in", f"{first} better than {second}"),
+            ("worse in", f"{first} worse than {second}"),
+            (f"equivalent within ±{summary['equivalence_margin']:g} in", "equivalent"),
+            ("not resolved in", "not resolved"),
+        ]
+        said = []
+        for words, verdict in verdicts:
+            chosen = [r for r in rows if r["verdict"] == verdict]
+            said.append(f"{words} {len(chosen)}" + (f" ({_panels_named(chosen, every)})" if chosen else ""))
+        parts.append(f"{first} against {second}: " + ", ".join(said))
+    text = (
+        f"**On the primary measure** ({summary['primary']['measure']}, fixed before the runs; Holm over "
+        f"{len(panels)} tests, {sum(every.values())} panels): " + "; ".join(parts) + "."
+    )
+    ladders = summary["secondary"].get("ladders", {})
+    said = []
+    for name, ladder in ladders.items():
+        found = []
+        for sign, side in ((1, "above"), (-1, "below")):
+            hit = [
+                c for c in ladder["cells"] if c["difference"]["p_holm"] <= 0.05 and sign * c["difference"]["mean"] > 0
+            ]
+            at: dict[str, list[str]] = {}
+            for cell in hit:
+                at.setdefault(cell["setting"], []).append(f"{cell['rung']:g}")
+            where = "; ".join(f"{s} at {', '.join(r)}" for s, r in at.items())
+            found.append(f"{side} 0 in {len(hit)}" + (f" ({where})" if hit else ""))
+        said.append(f"{found[0]} of the {name} ladder's {len(ladder['cells'])} cells and {found[1]}")
+    if said:
+        first, second = next(iter(ladders.values()))["pair"]
+        text += (
+            f" **On the robustness ladders** (secondary; the change of a run's margin from the unperturbed "
+            f"level, {first} − {second} paired by seed, Holm per ladder; above 0: the {first} predator "
+            f"the more robust), the difference is significantly " + "; ".join(said) + "."
+        )
+    return _wrapped(text)
+
+
 def residual_block() -> str:
     """docs/residual.md's generated block: the residual study's report
     (``pursuit-bench report results/residual-study``'s residual-study.md, its headings one level
@@ -262,6 +331,7 @@ def residual_block() -> str:
         runs, kinds=study.kinds, pairs=study.pairs, differs=study.differs, seed_rule=study.seed_rule
     )
     tables = ("\n" + rule_report.markdown(summary, study.differs)).replace("\n## ", "\n### ").strip()
+    tables = residual_headline(summary) + "\n\n" + tables
     judged = list(dict.fromkeys(rule_report.setting_of(r) for r in done))
     if len(judged) < len(study.settings):
         panels = len(summary["primary"]["panels"])

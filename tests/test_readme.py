@@ -59,6 +59,41 @@ def test_docs_residual_md_s_study_block_is_what_the_committed_results_give() -> 
     assert check_readme.residual_block() in check_readme.RESIDUAL_DOC.read_text()
 
 
+def test_the_residual_study_s_headline_counts_what_its_tables_show() -> None:
+    """The sentences above docs/residual.md's tables against the tables as rendered: each
+    comparison's verdicts counted from the primary table's rows, each ladder's significant cells
+    from its table's p (Holm) and sign."""
+    block = check_readme.residual_block()
+    if "### Primary" not in block:
+        pytest.skip("no setting of the residual study judged yet")
+    headline = " ".join(block.split("**On the primary measure**", 1)[1].split("###", 1)[0].split())
+    primary = block.split("### Primary", 1)[1].split("\n### ", 1)[0]
+    rows = [[c.strip(" *") for c in line.split("|")[1:-1]] for line in primary.splitlines() if line.startswith("| ")]
+    verdicts: dict[str, list[str]] = {}
+    for row in rows[1:]:
+        verdicts.setdefault(row[2], []).append(row[-1])
+    for comparison, found in verdicts.items():
+        first, second = comparison.split(" − ")
+        said = headline.split(f"{first} against {second}: ", 1)[1].split(";", 1)[0]
+        better, worse = found.count(f"{first} better than {second}"), found.count(f"{first} worse than {second}")
+        assert said.startswith(f"better in {better}") and f"worse in {worse}" in said
+        assert f"±0.05 in {found.count('equivalent')}" in headline.split(f"{first} against {second}: ", 1)[1]
+        assert f"not resolved in {found.count('not resolved')}" in headline.split(f"{first} against {second}: ", 1)[1]
+    ladders = block.split("### Secondary: the robustness ladders", 1)[1].split("\n### ", 1)[0]
+    tables = re.findall(r"\n(\S+) \(one Holm family of \d+\):\n\n((?:\|.*\n?)+)", ladders)
+    assert len(tables) == 3
+    for name, table in tables:
+        cells = [[c.strip() for c in line.split("|")[1:-1]] for line in table.splitlines() if line.startswith("| ")]
+        above = sum(float(c[-1]) <= 0.05 and float(c[-2].split()[0]) > 0 for c in cells[1:])
+        below = sum(float(c[-1]) <= 0.05 and float(c[-2].split()[0]) < 0 for c in cells[1:])
+        about = re.search(
+            rf"above 0 in (\d+)(?: \([^)]*\))? of the {re.escape(name)} ladder's (\d+) cells and below 0 in (\d+)",
+            headline,
+        )
+        assert about is not None, name
+        assert (int(about[1]), int(about[2]), int(about[3])) == (above, len(cells) - 1, below)
+
+
 def test_the_residual_study_s_block_judges_only_the_settings_whose_runs_are_all_in(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
