@@ -74,11 +74,15 @@ def test_the_residual_study_s_headline_counts_what_its_tables_show() -> None:
         verdicts.setdefault(row[2], []).append(row[-1])
     for comparison, found in verdicts.items():
         first, second = comparison.split(" − ")
-        said = headline.split(f"{first} against {second}: ", 1)[1].split(";", 1)[0]
-        better, worse = found.count(f"{first} better than {second}"), found.count(f"{first} worse than {second}")
-        assert said.startswith(f"better in {better}") and f"worse in {worse}" in said
-        assert f"±0.05 in {found.count('equivalent')}" in headline.split(f"{first} against {second}: ", 1)[1]
-        assert f"not resolved in {found.count('not resolved')}" in headline.split(f"{first} against {second}: ", 1)[1]
+        named = r"(\d+)(?: \([^)]*\))?"
+        said = re.search(
+            rf"{first} against {second}: better in {named}, worse in {named}, "
+            rf"equivalent within ±[\d.]+ in {named}, not resolved in {named}",
+            headline,
+        )
+        assert said is not None, comparison
+        expected = [f"{first} better than {second}", f"{first} worse than {second}", "equivalent", "not resolved"]
+        assert [int(n) for n in said.groups()] == [found.count(v) for v in expected]
     ladders = block.split("### Secondary: the robustness ladders", 1)[1].split("\n### ", 1)[0]
     tables = re.findall(r"\n(\S+) \(one Holm family of \d+\):\n\n((?:\|.*\n?)+)", ladders)
     assert len(tables) == 3
