@@ -3,7 +3,7 @@ run: the reference is a git worktree of commit ``--reference`` (default ``8ec03b
 commit before it), imported in its own processes beside ours, repeats interleaved.
 
     python benchmarks/bench_speed.py [--repeats 3] [--episodes 1000] [--reference 8ec03b5]
-        [--sections train,parts,stacked,update,eval]
+        [--sections train,parts,stacked,update,eval] [--clock cpu|wall]
 
 Prints, each as a median of ``--repeats`` and as today / reference:
 
@@ -19,6 +19,12 @@ Prints, each as a median of ``--repeats`` and as today / reference:
   256×256 products measured in the same process);
 - evaluation episodes/s of the paper's protocol (the shipped 1p-high agents, ``--episodes`` per
   variant), and whether the two evaluations' results are identical.
+
+The training measurements (transitions/s, the parts, the stacks) are timed by the worker's CPU
+time by default (``--clock cpu``): on a machine others share, the wall clock counts the time the
+worker waits for a core, which moves with their load (two runs of the same command differed by
+0.1–0.5 in the ratio, docs/benchmarks.md), while a one-threaded worker's CPU time is what its steps
+cost. ``--clock wall`` times them by the wall clock, for a machine to itself.
 
 One torch thread, as on a busy two-core machine. Needs git (the worktree is made under the
 system's temporary folder and removed at the end).
@@ -44,7 +50,7 @@ from bench_train import member_update_flops  # noqa: E402  (the same bound as th
 
 #: What a worker process measures: ``python bench_speed.py --worker KIND ARGS…`` prints one JSON line.
 WORKER = r"""
-import json, statistics, sys, time
+import json, os, statistics, sys, time
 import numpy as np
 import torch
 torch.set_num_threads(1)
@@ -54,16 +60,18 @@ from pursuit_bench.training.train import TrainConfig, Trainer
 
 kind, args = sys.argv[1], sys.argv[2:]
 AGENT = REPRODUCTION.replace(learning_starts=500)
+# the training measurements' clock: the process's CPU time, or the wall clock
+clock = time.process_time if os.environ.get("BENCH_CLOCK", "cpu") == "cpu" else time.perf_counter
 
 def transitions_per_second(condition, runs, steps):
     configs = [TrainConfig(condition=condition, agent=AGENT, num_envs=32, seed=s, episodes=10**9) for s in range(runs)]
     trainer = Trainer(configs)
     while trainer.groups[0].learner.steps < AGENT.learning_starts + 32:
         trainer.step()  # the replays past learning_starts: we time learning, not warm-up
-    start = time.perf_counter()
+    start = clock()
     for _ in range(steps):
         trainer.step()
-    return steps * 32 * runs / (time.perf_counter() - start)
+    return steps * 32 * runs / (clock() - start)
 
 def member_update_seconds(members):
     from pursuit_bench.agents.dqn import DQNLearner
@@ -117,12 +125,12 @@ def step_parts(condition, steps):
 
     def timed(part, function):
         def wrapper(*a, **k):
-            stack.append([part, time.perf_counter(), 0.0])
+            stack.append([part, clock(), 0.0])
             try:
                 return function(*a, **k)
             finally:
                 _, start, nested = stack.pop()
-                elapsed = time.perf_counter() - start
+                elapsed = clock() - start
                 spent[part] += elapsed - nested
                 if stack:
                     stack[-1][2] += elapsed
@@ -140,10 +148,10 @@ def step_parts(condition, steps):
         trainer.step()
     for part in spent:
         spent[part] = 0.0
-    start = time.perf_counter()
+    start = clock()
     for _ in range(steps):
         trainer.step()
-    total = time.perf_counter() - start
+    total = clock() - start
     out = {part: 1e3 * seconds / steps for part, seconds in spent.items()}
     out["rest of the loop"] = 1e3 * (total - sum(spent.values())) / steps
     out["total"] = 1e3 * total / steps
@@ -171,9 +179,16 @@ elif kind == "eval":
 """
 
 
+#: Every BLAS and OpenMP pool of a worker at one thread, as in a study (a run a core): a pool's
+#: spare threads wait by spinning, which the CPU-time clock would count as the run's work.
+ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+#: The training measurements' clock (``--clock``): ``cpu`` or ``wall``.
+CLOCK = {"clock": "cpu"}
+
+
 def measure(tree: Path, *args: str) -> object:
     """One worker's answer, with ``tree``'s pursuit_bench first on the path."""
-    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env = {**os.environ, "PYTHONPATH": str(tree), "BENCH_CLOCK": CLOCK["clock"], **ONE_THREAD}
     done = subprocess.run([sys.executable, "-c", WORKER, *args], env=env, capture_output=True, text=True, cwd=tree)
     if done.returncode != 0:
         raise SystemExit(f"worker {args} in {tree} failed:\n{done.stderr}")
@@ -204,7 +219,15 @@ def main() -> None:
         default=",".join(SECTIONS),
         help=f"what to measure, comma-separated among {', '.join(SECTIONS)} (default: all)",
     )
+    parser.add_argument(
+        "--clock",
+        choices=("cpu", "wall"),
+        default="cpu",
+        help="time training by the worker's CPU time (default: what a one-threaded run costs, whatever else "
+        "the machine runs) or by the wall clock (what it takes on a machine to itself)",
+    )
     args = parser.parse_args()
+    CLOCK["clock"] = args.clock
     args.sections = args.sections.split(",")
     unknown = set(args.sections) - set(SECTIONS)
     if unknown:
@@ -228,7 +251,10 @@ def reference_tree(commit: str) -> Iterator[Path]:
 
 
 def report(args: argparse.Namespace, trees: dict[str, Path]) -> None:
-    print(f"today: {ROOT}; reference: commit {args.reference}; medians of {args.repeats}, one torch thread")
+    print(
+        f"today: {ROOT}; reference: commit {args.reference}; medians of {args.repeats}, one torch thread; "
+        f"training timed by the {'CPU time' if args.clock == 'cpu' else 'wall clock'}"
+    )
     med = statistics.median
     alone = {}
     for condition in ("1p-high", "3p-high-shared") if "train" in args.sections else ():
