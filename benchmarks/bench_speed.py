@@ -23,7 +23,7 @@ Prints, each as a median of ``--repeats`` and as today / reference:
 The training measurements (transitions/s, the parts, the stacks) are timed by the worker's CPU
 time by default (``--clock cpu``): on a machine others share, the wall clock counts the time the
 worker waits for a core, which moves with their load (two runs of the same command differed by
-0.1–0.5 in the ratio, docs/benchmarks.md), while a one-threaded worker's CPU time is what its steps
+0.1–0.6 in the ratio, docs/benchmarks.md), while a one-threaded worker's CPU time is what its steps
 cost. ``--clock wall`` times them by the wall clock, for a machine to itself.
 
 One torch thread, as on a busy two-core machine. Needs git (the worktree is made under the
