@@ -182,13 +182,11 @@ elif kind == "eval":
 #: Every BLAS and OpenMP pool of a worker at one thread, as in a study (a run a core): a pool's
 #: spare threads wait by spinning, which the CPU-time clock would count as the run's work.
 ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-#: The training measurements' clock (``--clock``): ``cpu`` or ``wall``.
-CLOCK = {"clock": "cpu"}
 
 
 def measure(tree: Path, *args: str) -> object:
     """One worker's answer, with ``tree``'s pursuit_bench first on the path."""
-    env = {**os.environ, "PYTHONPATH": str(tree), "BENCH_CLOCK": CLOCK["clock"], **ONE_THREAD}
+    env = {**os.environ, "PYTHONPATH": str(tree), **ONE_THREAD}
     done = subprocess.run([sys.executable, "-c", WORKER, *args], env=env, capture_output=True, text=True, cwd=tree)
     if done.returncode != 0:
         raise SystemExit(f"worker {args} in {tree} failed:\n{done.stderr}")
@@ -227,7 +225,7 @@ def main() -> None:
         "the machine runs) or by the wall clock (what it takes on a machine to itself)",
     )
     args = parser.parse_args()
-    CLOCK["clock"] = args.clock
+    os.environ["BENCH_CLOCK"] = args.clock  # the workers' clock: they inherit the environment
     args.sections = args.sections.split(",")
     unknown = set(args.sections) - set(SECTIONS)
     if unknown:

@@ -258,6 +258,8 @@ def residual_headline(summary: dict[str, Any]) -> str:
     """What the study's report says, in sentences: each comparison's primary verdicts with the
     panels named, then each robustness ladder's cells where the residual predator's margin changes
     significantly more or less favourably than the hierarchical one's (Holm per ladder), settings named."""
+    from pursuit_bench.study import statistics
+
     panels = summary["primary"]["panels"]
     first_pair = list(summary["comparisons"][0])
     every: dict[str, int] = {}
@@ -285,11 +287,13 @@ def residual_headline(summary: dict[str, Any]) -> str:
     ladders = summary["secondary"].get("ladders", {})
     said = []
     for name, ladder in ladders.items():
+        sides = [
+            statistics.difference_verdict(c["difference"]["mean"], c["difference"]["p_holm"], None, ("below", "above"))
+            for c in ladder["cells"]
+        ]
         found = []
-        for sign, side in ((1, "above"), (-1, "below")):
-            hit = [
-                c for c in ladder["cells"] if c["difference"]["p_holm"] <= 0.05 and sign * c["difference"]["mean"] > 0
-            ]
+        for side in ("above", "below"):
+            hit = [c for c, s in zip(ladder["cells"], sides, strict=True) if s == side]
             at: dict[str, list[str]] = {}
             for cell in hit:
                 at.setdefault(cell["setting"], []).append(f"{cell['rung']:g}")
