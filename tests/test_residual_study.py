@@ -408,3 +408,85 @@ def test_a_tiny_run_of_an_obstacle_setting_trains_its_own_population_and_all_thr
                 "obs-noise=0.05",
                 "obs-noise=0.1",
             ]
+
+
+def _descriptives() -> ModuleType:
+    """scripts/residual_descriptives.py, loaded as a module."""
+    path = ROOT / "scripts" / "residual_descriptives.py"
+    spec = importlib.util.spec_from_file_location("residual_descriptives", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _run_with_corrections(kind: str, seed: int, corrected: float, margin: float) -> dict[str, object]:
+    """A compact run of one predator whose pool margin is ``margin`` (trained return against
+    fixed modes at 0) and, for a residual run, whose corrected share is ``corrected``: 100 stalking
+    states near the prey, 100 further, 50 chasing."""
+    run: dict[str, object] = {
+        "format": rule_study.FORMAT,
+        "study": "residual-study",
+        "setting": "1p-high",
+        "condition": "1p-high",
+        "kind": kind,
+        "seed": seed,
+        "pool": {"15000": {"FleeingPrey": {"panels": {"predator_0": [margin, 0.0, 0.0]}}}},
+    }
+    if kind == "residual":
+        bins = [0.0, 0.5, 1.0]
+        run["corrections"] = {
+            "predator_0": {
+                "corrected": corrected,
+                "p_chase": 0.2,
+                "correction_by_distance": {
+                    "bins": bins,
+                    "stalk": {"states": [100, 100], "corrected": [corrected, corrected / 2]},
+                    "chase": {"states": [50, 0], "corrected": [1.0, None]},
+                },
+            }
+        }
+    return run
+
+
+def test_the_corrections_summary_places_corrected_states_and_ranks_them_against_the_margin(tmp_path: Path) -> None:
+    """Known answers: a residual run correcting a share c of its near stalking states, c/2 of the
+    further ones and every chasing state has 100c, 50c and 50 corrected states; across seeds whose
+    margin gain over the hierarchical run rises with c, Spearman's ρ is +1."""
+    summary = _descriptives()
+    run = _run_with_corrections("residual", 0, 0.2, 0.1)
+    assert summary._where(run).tolist() == pytest.approx([20.0, 10.0, 50.0])
+    (tmp_path / "runs").mkdir()
+    for seed, c in enumerate([0.1, 0.3, 0.2]):
+        for kind, margin in (("residual", c), ("hierarchical", 0.0)):
+            document = _run_with_corrections(kind, seed, c, margin)
+            name = f"1p-high-{kind}-seed{seed}.json.gz"
+            (tmp_path / "runs" / name).write_bytes(gzip.compress(json.dumps(document).encode()))
+    runs = rule_study.read_runs(tmp_path / "runs")
+    row = next(line for line in summary.corrections_table(runs) if line.startswith("| 1p-high |"))
+    cells = [cell.strip() for cell in row.strip("|").split("|")]
+    assert cells[1:5] == ["3", "20.0%", "30.0%", "1/3"]
+    assert cells[-2] == "+1.00"
+
+
+def test_the_ladder_levels_are_each_kind_s_mean_margin_at_each_level() -> None:
+    """Known answer: two residual runs of one predator with margins 0.1 and 0.3 under noise 0.05
+    read +0.200 in that column, a level a run lacks reads —."""
+    summary = _descriptives()
+    runs = []
+    for seed, margin in enumerate([0.1, 0.3]):
+        run = _run_with_corrections("residual", seed, 0.0, 0.0)
+        run["ladders"] = {"none": {"margin": 0.5}, "obs-noise=0.05": {"margin": margin}}
+        runs.append(run)
+    row = next(line for line in summary.ladder_levels_table(runs) if line.startswith("| 1p-high | residual |"))
+    cells = [cell.strip() for cell in row.strip("|").split("|")]
+    assert cells[2:6] == ["2", "+0.500", "—", "+0.200"]
+
+
+def test_the_committed_descriptives_are_what_their_script_gives() -> None:
+    """results/residual-study/descriptives.md (docs/residual.md cites it) is what
+    scripts/residual_descriptives.py computes from the committed runs, its first line (the
+    command) aside."""
+    summary = _descriptives()
+    committed = (ROOT / "results" / "residual-study" / "descriptives.md").read_text().splitlines()
+    assert committed[1:] == summary.tables(ROOT / "results" / "residual-study").splitlines()[1:]
