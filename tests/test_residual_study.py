@@ -452,7 +452,7 @@ def _run_with_corrections(kind: str, seed: int, corrected: float, margin: float)
 def test_the_corrections_summary_places_corrected_states_and_ranks_them_against_the_margin(tmp_path: Path) -> None:
     """Known answers: a residual run correcting a share c of its near stalking states, c/2 of the
     further ones and every chasing state has 100c, 50c and 50 corrected states; across seeds whose
-    margin gain over the hierarchical run rises with c, Spearman's ρ is +1."""
+    margin and return gains over the hierarchical run rise with c, both Spearman's ρ are +1."""
     summary = _descriptives()
     run = _run_with_corrections("residual", 0, 0.2, 0.1)
     assert summary._where(run).tolist() == pytest.approx([20.0, 10.0, 50.0])
@@ -466,7 +466,7 @@ def test_the_corrections_summary_places_corrected_states_and_ranks_them_against_
     row = next(line for line in summary.corrections_table(runs) if line.startswith("| 1p-high |"))
     cells = [cell.strip() for cell in row.strip("|").split("|")]
     assert cells[1:5] == ["3", "20.0%", "30.0%", "1/3"]
-    assert cells[-2] == "+1.00"
+    assert cells[-6] == cells[-3] == "+1.00"  # against the margin and against the return
 
 
 def test_the_ladder_levels_are_each_kind_s_mean_margin_at_each_level() -> None:
