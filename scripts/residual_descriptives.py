@@ -156,7 +156,12 @@ def main() -> None:
     args = parser.parse_args()
     if not (args.study / "runs").is_dir():
         sys.exit(f"error: {args.study / 'runs'} is not a folder of a study's runs")
-    text = tables(args.study)
+    if not any((args.study / "runs").glob("*.json.gz")):
+        sys.exit(f"error: {args.study / 'runs'} holds no run (*.json.gz)")
+    try:
+        text = tables(args.study)
+    except (OSError, ValueError, KeyError, TypeError) as error:  # a file that is not a study's compact run
+        sys.exit(f"error: {args.study / 'runs'}: not a residual study's runs ({type(error).__name__}: {error})")
     if args.out:
         atomic_write_text(args.out, text)
     else:

@@ -490,3 +490,15 @@ def test_the_committed_descriptives_are_what_their_script_gives() -> None:
     summary = _descriptives()
     committed = (ROOT / "results" / "residual-study" / "descriptives.md").read_text().splitlines()
     assert committed[1:] == summary.tables(ROOT / "results" / "residual-study").splitlines()[1:]
+
+
+def test_the_descriptives_script_refuses_a_folder_without_runs_in_one_line(tmp_path: Path) -> None:
+    """No runs, or a file that is not a compact run: one line naming the folder, exit status 1."""
+    script = ROOT / "scripts" / "residual_descriptives.py"
+    (tmp_path / "runs").mkdir()
+    for content in (None, b"not gzip"):
+        if content is not None:
+            (tmp_path / "runs" / "a.json.gz").write_bytes(content)
+        done = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 1
+        assert done.stderr.count("\n") == 1 and done.stderr.startswith(f"error: {tmp_path / 'runs'}")
