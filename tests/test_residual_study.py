@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 import pytest
@@ -420,10 +421,11 @@ def _descriptives() -> ModuleType:
     return module
 
 
-def _run_with_corrections(kind: str, seed: int, corrected: float, margin: float) -> dict[str, object]:
-    """A compact run of one predator whose pool margin is ``margin`` (trained return against
-    fixed modes at 0) and, for a residual run, whose corrected share is ``corrected``: 100 stalking
-    states near the prey, 100 further, 50 chasing."""
+def _run_with_corrections(kind: str, seed: int, corrected: float, trained: float, fixed: float) -> dict[str, object]:
+    """A compact run of one predator of 1p-high: against one member, ``trained`` its return and
+    ``fixed`` both fixed modes' (pool margin ``trained - fixed``); a residual run corrects a share
+    ``corrected`` of 100 stalking states near the prey, half that of 100 further, and all of 50
+    chasing states."""
     run: dict[str, object] = {
         "format": rule_study.FORMAT,
         "study": "residual-study",
@@ -431,56 +433,72 @@ def _run_with_corrections(kind: str, seed: int, corrected: float, margin: float)
         "condition": "1p-high",
         "kind": kind,
         "seed": seed,
-        "pool": {"15000": {"FleeingPrey": {"panels": {"predator_0": [margin, 0.0, 0.0]}}}},
+        "pool": {"15000": {rule_study.FLEEING: {"panels": {"predator_0": [trained, fixed, fixed]}}}},
     }
     if kind == "residual":
-        bins = [0.0, 0.5, 1.0]
         run["corrections"] = {
             "predator_0": {
                 "corrected": corrected,
                 "p_chase": 0.2,
                 "correction_by_distance": {
-                    "bins": bins,
+                    "bins": [0.0, 0.5, 1.0],
                     "stalk": {"states": [100, 100], "corrected": [corrected, corrected / 2]},
                     "chase": {"states": [50, 0], "corrected": [1.0, None]},
+                    "used": {},
                 },
             }
         }
     return run
 
 
-def test_the_corrections_summary_places_corrected_states_and_ranks_them_against_the_margin(tmp_path: Path) -> None:
-    """Known answers: a residual run correcting a share c of its near stalking states, c/2 of the
-    further ones and every chasing state has 100c, 50c and 50 corrected states; across seeds whose
-    margin and return gains over the hierarchical run rise with c, both Spearman's ρ are +1."""
-    summary = _descriptives()
-    run = _run_with_corrections("residual", 0, 0.2, 0.1)
-    assert summary._where(run).tolist() == pytest.approx([20.0, 10.0, 50.0])
-    (tmp_path / "runs").mkdir()
-    for seed, c in enumerate([0.1, 0.3, 0.2]):
-        for kind, margin in (("residual", c), ("hierarchical", 0.0)):
-            document = _run_with_corrections(kind, seed, c, margin)
+def _write_runs(folder: Path, shares: list[float]) -> list[dict[str, Any]]:
+    """One residual and one hierarchical run a seed, residual seed s correcting ``shares[s]``: its
+    margin gain over the hierarchical run (0) is +c, its return gain −c (fixed modes at −2c)."""
+    (folder / "runs").mkdir()
+    for seed, c in enumerate(shares):
+        for kind, trained, fixed in (("residual", -c, -2 * c), ("hierarchical", 0.0, 0.0)):
+            document = _run_with_corrections(kind, seed, c, trained, fixed)
             name = f"1p-high-{kind}-seed{seed}.json.gz"
-            (tmp_path / "runs" / name).write_bytes(gzip.compress(json.dumps(document).encode()))
-    runs = rule_study.read_runs(tmp_path / "runs")
-    row = next(line for line in summary.corrections_table(runs) if line.startswith("| 1p-high |"))
-    cells = [cell.strip() for cell in row.strip("|").split("|")]
-    assert cells[1:5] == ["3", "20.0%", "30.0%", "1/3"]
-    assert cells[-6] == cells[-3] == "+1.00"  # against the margin and against the return
+            (folder / "runs" / name).write_bytes(gzip.compress(json.dumps(document).encode()))
+    return rule_study.read_runs(folder / "runs")
+
+
+def _row(lines: list[str], start: str) -> list[str]:
+    return [cell.strip() for cell in next(line for line in lines if line.startswith(start)).strip("|").split("|")]
+
+
+def test_the_corrections_summary_places_corrected_states_and_ranks_them_against_both_gaps(tmp_path: Path) -> None:
+    """Known answers: runs correcting shares c = 0.1, 0.3, 0.2 of their near stalking states, c/2
+    of the further ones and every chasing state have 60, 30 and 150 corrected states in all (25 %,
+    12.5 %, 62.5 %); their margin gains rise with c (ρ +1) and their return gains fall (ρ −1)."""
+    summary = _descriptives()
+    lines = summary.corrections_table(_write_runs(tmp_path, [0.1, 0.3, 0.2]))
+    cells = _row(lines, "| 1p-high |")
+    assert cells[1:9] == ["3", "20.0%", "30.0%", "1/3", "20.0%", "25%", "12%", "62%"]
+    assert (cells[9], cells[12]) == ("+1.00", "-1.00")
+    assert any("over the table's 2 correlations" in line for line in lines)
+
+
+def test_the_corrections_summary_gives_no_correlation_below_three_seeds(tmp_path: Path) -> None:
+    summary = _descriptives()
+    cells = _row(summary.corrections_table(_write_runs(tmp_path, [0.1, 0.3])), "| 1p-high |")
+    assert cells[9:] == ["—"] * 6
 
 
 def test_the_ladder_levels_are_each_kind_s_mean_margin_at_each_level() -> None:
-    """Known answer: two residual runs of one predator with margins 0.1 and 0.3 under noise 0.05
-    read +0.200 in that column, a level a run lacks reads —."""
+    """Known answer: two residual runs with margins 0.1 and 0.3 under noise 0.05 read +0.200 in
+    that column; a level one run of the group lacks reads —."""
     summary = _descriptives()
     runs = []
     for seed, margin in enumerate([0.1, 0.3]):
-        run = _run_with_corrections("residual", seed, 0.0, 0.0)
+        run = _run_with_corrections("residual", seed, 0.0, 0.0, 0.0)
         run["ladders"] = {"none": {"margin": 0.5}, "obs-noise=0.05": {"margin": margin}}
+        if seed == 0:
+            run["ladders"]["delay=1"] = {"margin": 0.0}
         runs.append(run)
-    row = next(line for line in summary.ladder_levels_table(runs) if line.startswith("| 1p-high | residual |"))
-    cells = [cell.strip() for cell in row.strip("|").split("|")]
-    assert cells[2:6] == ["2", "+0.500", "—", "+0.200"]
+    lines = summary.ladder_levels_table(runs)
+    assert "| none | obs-noise=0.05 | delay=1 |" in lines[3]
+    assert _row(lines, "| 1p-high | residual |")[2:] == ["2", "+0.500", "+0.200", "—"]
 
 
 def test_the_committed_descriptives_are_what_their_script_gives() -> None:
@@ -492,11 +510,13 @@ def test_the_committed_descriptives_are_what_their_script_gives() -> None:
     assert committed[1:] == summary.tables(ROOT / "results" / "residual-study").splitlines()[1:]
 
 
-def test_the_descriptives_script_refuses_a_folder_without_runs_in_one_line(tmp_path: Path) -> None:
-    """No runs, or a file that is not a compact run: one line naming the folder, exit status 1."""
+def test_the_descriptives_script_refuses_a_folder_without_residual_runs_in_one_line(tmp_path: Path) -> None:
+    """No runs, no residual run (a hierarchical one only), or a file that is not a compact run:
+    one line naming the folder, exit status 1."""
     script = ROOT / "scripts" / "residual_descriptives.py"
     (tmp_path / "runs").mkdir()
-    for content in (None, b"not gzip"):
+    hierarchical = gzip.compress(json.dumps(_run_with_corrections("hierarchical", 0, 0.0, 0.0, 0.0)).encode())
+    for content in (None, hierarchical, b"not gzip"):
         if content is not None:
             (tmp_path / "runs" / "a.json.gz").write_bytes(content)
         done = subprocess.run([sys.executable, str(script), str(tmp_path)], capture_output=True, text=True, timeout=120)

@@ -252,7 +252,8 @@ def three_kind_runs(n: int = 8, seed: int = 1) -> list[dict]:
                     run["ladders"] = {"none": {"margin": base}, "obs-noise=0.1": {"margin": base - drop},
                                       "delay=3": {"margin": base - 0.1 + rng.normal(0, 0.02)}}  # fmt: skip
                 if kind == "residual":
-                    run["corrections"] = {p: {"corrected": 0.01 * s, "correction_by_distance": by_distance(s)}
+                    run["corrections"] = {p: {"corrected": 0.01 * s, "p_chase": 0.1,
+                                              "correction_by_distance": by_distance(s)}
                                           for p in panels}  # fmt: skip
                 runs.append(run)
     return runs
@@ -340,6 +341,11 @@ def test_three_kinds_are_compared_pairwise_in_one_holm_family_a_budget() -> None
     assert all(r["differs"] for (s, _), r in corrections.items() if s == "1p-high")  # 0.2 ahead
     assert not any(r["differs"] for (s, _), r in corrections.items() if s == "1p-high-obstacles4")
     assert corrections[("1p-high", 3)]["corrected"] == {"predator_0": 0.03}
+    assert corrections[("1p-high", 3)]["in_chase"] == {"predator_0": 0.1}
+    # its return beside its twin's: the margin plus the better fixed mode's return (both kinds share it here)
+    row, better_fixed = corrections[("1p-high", 3)], TRUTH3[("1p-high", "predator_0")][0] - 0.25
+    assert row["return"] - row["margin"] == pytest.approx(better_fixed)
+    assert row["hierarchical_return"] - row["hierarchical_margin"] == pytest.approx(better_fixed)
     assert corrections[("1p-high", 3)]["turn"] == pytest.approx(45.0) and corrections[("1p-high", 0)]["turn"] is None
 
 

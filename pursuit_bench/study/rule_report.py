@@ -426,8 +426,9 @@ def mean_turn(by_predator: dict[str, Any]) -> float | None:
 
 def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[dict[str, Any]]:
     """Where and how much each residual run corrects the rule (secondary, descriptive): its pool
-    margin at ``final`` (mean over its predators) beside that of the hierarchical run of its seed,
-    whether they differ by more than ``differs``, and its share of corrected states."""
+    margin and return at ``final`` (means over its predators) beside those of the hierarchical run
+    of its seed, whether the margins differ by more than ``differs``, its share of corrected states
+    and its share of states in chase (per predator)."""
     rows = []
     for setting in dict.fromkeys(c for c, _ in panels(runs)):
         hierarchical = {r["seed"]: r for r in _runs_of(runs, setting, "hierarchical")}
@@ -436,16 +437,19 @@ def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[
                 continue
             predators = list(run["pool"][final][rule_study.FLEEING]["panels"])
 
-            def margin(r: dict[str, Any], predators: list[str] = predators) -> float:
-                return float(np.mean([rule_study.pooled(r["pool"][final], p)["margin"] for p in predators]))
+            def pooled(r: dict[str, Any], measure: str, predators: list[str] = predators) -> float:
+                return float(np.mean([rule_study.pooled(r["pool"][final], p)[measure] for p in predators]))
 
             twin = hierarchical.get(run["seed"])
             row: dict[str, Any] = {
                 "setting": setting,
                 "seed": run["seed"],
-                "margin": margin(run),
-                "hierarchical_margin": None if twin is None else margin(twin),
+                "margin": pooled(run, "margin"),
+                "hierarchical_margin": None if twin is None else pooled(twin, "margin"),
+                "return": pooled(run, "return"),
+                "hierarchical_return": None if twin is None else pooled(twin, "return"),
                 "corrected": {p: c["corrected"] for p, c in run["corrections"].items()},
+                "in_chase": {p: c["p_chase"] for p, c in run["corrections"].items()},
                 "turn": mean_turn(run["corrections"]),
                 "by_distance": {p: c["correction_by_distance"] for p, c in run["corrections"].items()},
             }
