@@ -61,6 +61,7 @@ def corrections_table(runs: list[dict[str, Any]]) -> list[str]:
         where = sum((_where(r["by_distance"]) for r in mine), np.zeros(3))
         where = where / max(where.sum(), 1e-12)
         paired = [r for r in mine if r["hierarchical_margin"] is not None]
+        corrected = [float(np.mean(list(r["corrected"].values()))) for r in paired]
         row: list[str | None] = [
             setting,
             str(len(mine)),
@@ -72,7 +73,6 @@ def corrections_table(runs: list[dict[str, Any]]) -> list[str]:
         ]
         for measure in ("margin", "return"):
             gaps = [r[measure] - r[f"hierarchical_{measure}"] for r in paired]
-            corrected = [float(np.mean(list(r["corrected"].values()))) for r in paired]
             if len(paired) < FEWEST_SEEDS or np.ptp(gaps) == 0 or np.ptp(corrected) == 0:
                 row += ["—", "—", "—"]  # too few seeds, or a constant: no rank correlation
                 continue

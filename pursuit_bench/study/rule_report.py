@@ -437,17 +437,19 @@ def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[
                 continue
             predators = list(run["pool"][final][rule_study.FLEEING]["panels"])
 
-            def pooled(r: dict[str, Any], measure: str, predators: list[str] = predators) -> float:
-                return float(np.mean([rule_study.pooled(r["pool"][final], p)[measure] for p in predators]))
+            def pooled(r: dict[str, Any], predators: list[str] = predators) -> dict[str, float]:
+                each = [rule_study.pooled(r["pool"][final], p) for p in predators]
+                return {m: float(np.mean([e[m] for e in each])) for m in ("margin", "return")}
 
             twin = hierarchical.get(run["seed"])
+            mine, theirs = pooled(run), None if twin is None else pooled(twin)
             row: dict[str, Any] = {
                 "setting": setting,
                 "seed": run["seed"],
-                "margin": pooled(run, "margin"),
-                "hierarchical_margin": None if twin is None else pooled(twin, "margin"),
-                "return": pooled(run, "return"),
-                "hierarchical_return": None if twin is None else pooled(twin, "return"),
+                "margin": mine["margin"],
+                "hierarchical_margin": None if theirs is None else theirs["margin"],
+                "return": mine["return"],
+                "hierarchical_return": None if theirs is None else theirs["return"],
                 "corrected": {p: c["corrected"] for p, c in run["corrections"].items()},
                 "in_chase": {p: c["p_chase"] for p, c in run["corrections"].items()},
                 "turn": mean_turn(run["corrections"]),
