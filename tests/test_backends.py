@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pursuit_bench import parallel_env
-from pursuit_bench.env.vector import VectorPursuitEnv
+from pursuit_bench.env.vector import VectorPursuitEnv, _actions_in_range
 
 
 def lockstep(wall_rule: str, steps: int, num_envs: int = 64, condition: str = "3p-low-individual"):
@@ -102,5 +102,24 @@ def test_bad_batched_actions() -> None:
         vec.step(np.zeros((2, 2), dtype=int))
     with pytest.raises(ValueError, match=r"directions in 0\.\.11"):
         vec.step(np.full((2, 2, 2), 12))
+    for bad in ((0, 0, 0, 2), (1, 1, 1, -1), (0, 0, 1, 12)):  # a predator's mode, a direction
+        actions = np.zeros((2, 2, 2), dtype=np.int64)
+        actions[bad[:3]] = bad[3]
+        with pytest.raises(ValueError, match="modes must be 0"):
+            vec.step(actions)
+    actions = np.zeros((2, 2, 2), dtype=np.int64)
+    actions[:, 1, 0] = 7  # the prey's mode is ignored
+    vec.step(actions)
+
+
+def test_the_compiled_action_check_agrees_with_the_array_form() -> None:
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        actions = rng.integers(-1, 13, size=(3, rng.integers(2, 5), 2))
+        actions[..., 0] = np.where(rng.random(actions.shape[:2]) < 0.9, actions[..., 0] % 2, actions[..., 0])
+        actions[..., 1] = np.where(rng.random(actions.shape[:2]) < 0.9, actions[..., 1] % 12, actions[..., 1])
+        modes, directions = actions[:, :-1, 0], actions[..., 1]
+        naive = not (((modes < 0) | (modes > 1)).any() or ((directions < 0) | (directions >= 12)).any())
+        assert _actions_in_range(actions, 12) == naive
     with pytest.raises(ValueError, match="num_envs=0"):
         VectorPursuitEnv(0, "1p-low")

@@ -195,3 +195,40 @@ def test_wall_features_are_the_own_position_in_the_line_of_sight_frame() -> None
         assert (u, v) == pytest.approx((expected_u, expected_v), abs=1e-5)
     learner = DQNLearner(16, 12, QUICK.replace(wall_features=True), seed=0)
     assert learner.online.n_obs == 18 and learner.evaluate(obs[None])[0].shape == (1, 50, 12)
+
+
+@pytest.mark.parametrize("prioritized", [True, False])
+def test_the_one_call_update_makes_the_numbers_of_sample_then_learn(prioritized: bool) -> None:
+    """``update`` (one compiled call: sample, loss and gradient, Adam, priorities) against the
+    calls it fuses, made one by one, on twin learners: the same bits, update after update, and
+    the target copies by the flat buffers the same as copying the state dict."""
+    config = QUICK.replace(wall_features=True, prioritized=prioritized, target_update_every=60, batch_size=16)
+    fused, parts = (DQNLearner(8, 5, config, members=3, seed=[4, 5, 6]) for _ in range(2))
+    rng = np.random.default_rng(0)
+    for step in range(12):
+        obs, next_obs = rng.normal(size=(2, 3, 20, 8)).astype(np.float32)
+        actions, rewards = rng.integers(0, 5, (3, 20)), rng.normal(size=(3, 20)).astype(np.float32)
+        terminated = (rng.random((3, 20)) < 0.1).astype(np.float32)
+        for learner in (fused, parts):
+            learner.store(obs, actions, rewards, next_obs, terminated)
+        if parts.steps % 60 == 0:  # store copied the target by the flat buffers: the state dict's copy agrees
+            copied = parts._target_flat.clone()
+            parts.target.load_state_dict(parts.online.state_dict())
+            assert torch.equal(copied, parts._target_flat)
+        if step < 2:
+            continue
+        losses = fused.update()
+        expected = parts.learn(parts.replay.sample(config.batch_size, parts.beta, parts.rngs))
+        np.testing.assert_array_equal(losses, expected)
+        for a, b in [
+            (fused.optimizer.flat, parts.optimizer.flat),
+            (fused.optimizer._m, parts.optimizer._m),
+            (fused.optimizer._v, parts.optimizer._v),
+            (fused._target_flat, parts._target_flat),
+        ]:
+            assert torch.equal(a, b)
+        for name in ("priorities", "tree", "max_priority"):
+            np.testing.assert_array_equal(getattr(fused.replay, name), getattr(parts.replay, name))
+    assert fused.updates == parts.updates == 10 and not torch.equal(
+        fused.online.trunk1.weight, fused.target.trunk1.weight
+    )

@@ -12,6 +12,7 @@ depend on its place in a stack.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -20,7 +21,7 @@ from torch import nn
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _adam_step(param, grad, exp_avg, exp_avg_sq, weight1, beta2, weight2, step_size, correction2, eps):
+def adam_step_kernel(param, grad, exp_avg, exp_avg_sq, weight1, beta2, weight2, step_size, correction2, eps):
     """One Adam step over flat float32 buffers, in place (the scalars float32, as torch rounds them)."""
     for i in range(param.size):
         g = grad[i]
@@ -80,12 +81,17 @@ class FlatAdam:
     def zero_grad(self) -> None:
         self.grad.zero_()
 
-    @torch.no_grad()
     def step(self) -> None:
+        """One Adam step over every parameter (the gradient buffer as it stands)."""
+        adam_step_kernel(*self.next_step())
+
+    def next_step(self) -> tuple[Any, ...]:
+        """Count one step and return :func:`adam_step_kernel`'s arguments for it: the buffers
+        and the step's scalars, in float32 as torch rounds them."""
         beta1, beta2 = self.betas
         self.step_count += 1
         f32 = np.float32
-        _adam_step(
+        return (
             *self._buffers,
             f32(1 - beta1),
             f32(beta2),

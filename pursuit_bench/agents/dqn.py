@@ -19,7 +19,13 @@ import torch.nn.functional as F
 
 from pursuit_bench.agents.adam import FlatAdam, flatten_parameters, parameter_offsets
 from pursuit_bench.agents.config import AgentConfig
-from pursuit_bench.agents.fused import act_kernel, choose_kernel, q_and_value_kernel, update_kernel
+from pursuit_bench.agents.fused import (
+    act_kernel,
+    choose_kernel,
+    q_and_value_kernel,
+    replay_update_kernel,
+    update_kernel,
+)
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, ReplayStack
 
@@ -208,7 +214,7 @@ class DQNLearner:
         if self.steps >= self.config.learning_starts:
             self._owed_updates += k * self.config.replay_ratio
         while self.steps >= self._next_target_copy:
-            self.target.load_state_dict(self.online.state_dict())
+            self._target_flat.copy_(self.optimizer.flat)  # both networks' parameters, one flat layout
             self._next_target_copy += self.config.target_update_every
 
     def train(self) -> np.ndarray | None:
@@ -220,8 +226,25 @@ class DQNLearner:
         return losses
 
     def update(self) -> np.ndarray:
-        """One gradient step for every member on its own prioritized batch; losses (M,)."""
-        return self.learn(self.replay.sample(self.config.batch_size, self.beta, self.rngs))
+        """One gradient step for every member on its own prioritized batch; losses (M,). The
+        numbers of :meth:`learn` on ``replay.sample``'s batch, in one compiled call
+        (:func:`~pursuit_bench.agents.fused.replay_update_kernel`)."""
+        losses = replay_update_kernel(
+            self.replay.arrays(),
+            self.replay.draws(self.config.batch_size, self.rngs),
+            self.beta,
+            self._flat,
+            self._target_np,
+            self._grad,
+            self._offsets,
+            self.n_actions,
+            self.config.gamma,
+            self.config.huber_delta,
+            self.config.wall_features,
+            self.optimizer.next_step(),
+        )
+        self.updates += 1
+        return losses
 
     def learn(self, batch: Batch) -> np.ndarray:
         """One gradient step on a batch with the member axis first (M, B, …), then its new

@@ -29,7 +29,9 @@ import numpy as np
 import scipy.linalg.cython_blas  # noqa: F401  (the BLAS numba's np.dot calls: loaded, so that it can be limited)
 from threadpoolctl import ThreadpoolController
 
+from pursuit_bench.agents.adam import adam_step_kernel
 from pursuit_bench.agents.network import HEAD, TRUNK
+from pursuit_bench.agents.replay import sample_kernel, update_priorities_kernel
 
 
 def _one_thread_for_scipys_blas() -> None:
@@ -272,3 +274,40 @@ def update_kernel(
                 total += grad_h1[i, k]
             gb1[k] = total
     return losses, td
+
+
+@numba.njit(cache=True, error_model="numpy")
+def replay_update_kernel(replay, draws, beta, online, target, grad, offsets, n_actions, gamma, delta, wall, adam):
+    """One whole update of every member, in one call: the batch drawn from the replay
+    (:func:`~pursuit_bench.agents.replay.sample_kernel` on ``draws``, the members' uniforms made
+    by the caller), the loss and gradient (:func:`update_kernel`), the Adam step
+    (:func:`~pursuit_bench.agents.adam.adam_step_kernel`, ``adam`` its buffers and scalars) and
+    the new priorities: the same calls, in the same order, as ``sample``, ``learn`` and
+    ``update_priorities`` made one by one, so the same numbers. ``replay`` is
+    :meth:`ReplayStack.arrays`' tuple. Returns the losses (M,)."""
+    tree, leaves, size, alpha, epsilon, prioritized, obs, actions, rewards, next_obs, terminated = replay[:11]
+    priorities, max_priority = replay[11], replay[12]
+    fractions, uniform = draws
+    indices, weights, b_obs, b_actions, b_rewards, b_next, b_terminated = sample_kernel(
+        tree, leaves, size, beta, fractions, uniform, obs, actions, rewards, next_obs, terminated
+    )
+    losses, td = update_kernel(
+        online,
+        target,
+        grad,
+        offsets,
+        n_actions,
+        b_obs,
+        b_next,
+        b_actions,
+        b_rewards,
+        b_terminated,
+        weights,
+        gamma,
+        delta,
+        wall,
+    )
+    adam_step_kernel(*adam)
+    if prioritized:
+        update_priorities_kernel(priorities, tree, leaves, alpha, epsilon, max_priority, indices, td)
+    return losses

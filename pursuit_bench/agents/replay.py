@@ -319,7 +319,7 @@ def _store(
 
 
 @numba.njit(cache=True)
-def _sample(tree, leaves, size, beta, fractions, uniform, obs, actions, rewards, next_obs, terminated):
+def sample_kernel(tree, leaves, size, beta, fractions, uniform, obs, actions, rewards, next_obs, terminated):
     """Indices (M, B), importance weights (M, B) and the transitions at those indices.
 
     Prioritized (``fractions`` (M, B) uniform in [0, 1)): the descent of :func:`_tree_draw`, and
@@ -354,7 +354,7 @@ def _sample(tree, leaves, size, beta, fractions, uniform, obs, actions, rewards,
 
 
 @numba.njit(cache=True)
-def _update_priorities(priorities, tree, leaves, alpha, epsilon, max_priority, indices, td_errors):
+def update_priorities_kernel(priorities, tree, leaves, alpha, epsilon, max_priority, indices, td_errors):
     """Member m's slots ``indices[m]`` to priorities ``|δ| + ε`` (in order: a slot drawn twice
     keeps its last), the trees updated and each member's largest priority raised."""
     members, batch = indices.shape
@@ -437,26 +437,55 @@ class ReplayStack:
     def sample(self, batch_size: int, beta: float, rngs: list[np.random.Generator]) -> Batch:
         """``batch_size`` transitions per member (with replacement), member m drawing from
         ``rngs[m]``; every array of the batch has the member axis first, (M, B, …)."""
-        if self.size == 0:
-            raise ValueError("sample() from an empty replay: add transitions first")
-        if not self.prioritized:
-            uniform = np.stack([rng.integers(0, self.size, size=batch_size) for rng in rngs])
-            fractions = np.empty((self.members, 0))
-        else:
-            uniform = np.empty((self.members, 0), dtype=np.int64)
-            fractions = np.stack([rng.random(batch_size) for rng in rngs])
+        fractions, uniform = self.draws(batch_size, rngs)
         arrays = self.obs, self.actions, self.rewards, self.next_obs, self.terminated
-        indices, weights, obs, actions, rewards, next_obs, terminated = _sample(
+        indices, weights, obs, actions, rewards, next_obs, terminated = sample_kernel(
             self.tree, self.leaves, self.size, beta, fractions, uniform, *arrays
         )
         return Batch(indices, obs, actions, rewards, next_obs, terminated, weights)
+
+    def draws(self, batch_size: int, rngs: list[np.random.Generator]) -> tuple[np.ndarray, np.ndarray]:
+        """The uniforms of one sample, member m's from ``rngs[m]``: ``(fractions, uniform)``, the
+        fractions (M, B) of the tree descents when prioritized, else the slots (M, B) drawn
+        uniformly (the other of the two empty), as :func:`sample_kernel` takes them."""
+        if self.size == 0:
+            raise ValueError("sample() from an empty replay: add transitions first")
+        if not self.prioritized:
+            uniform = np.empty((self.members, batch_size), dtype=np.int64)
+            for m, rng in enumerate(rngs):
+                uniform[m] = rng.integers(0, self.size, size=batch_size)
+            return np.empty((self.members, 0)), uniform
+        fractions = np.empty((self.members, batch_size))
+        for m, rng in enumerate(rngs):
+            fractions[m] = rng.random(batch_size)
+        return fractions, np.empty((self.members, 0), dtype=np.int64)
+
+    def arrays(self) -> tuple[Any, ...]:
+        """What the compiled update (:func:`pursuit_bench.agents.fused.replay_update_kernel`) reads
+        and writes of this replay: the trees and their sizes, α and ε, whether prioritized, the
+        five transition arrays, the priorities and each member's largest."""
+        return (
+            self.tree,
+            self.leaves,
+            self.size,
+            self.alpha,
+            self.priority_epsilon,
+            self.prioritized,
+            self.obs,
+            self.actions,
+            self.rewards,
+            self.next_obs,
+            self.terminated,
+            self.priorities,
+            self.max_priority,
+        )
 
     def update_priorities(self, indices: np.ndarray, td_errors: np.ndarray) -> None:
         """Set the priorities of sampled transitions (M, B) to ``|δ| + ε`` (a slot drawn twice
         keeps its last value)."""
         if not self.prioritized:
             return
-        _update_priorities(
+        update_priorities_kernel(
             self.priorities,
             self.tree,
             self.leaves,

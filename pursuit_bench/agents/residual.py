@@ -42,7 +42,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from pursuit_bench.agents.adam import _adam_step
+from pursuit_bench.agents.adam import adam_step_kernel
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.dqn import DECISIVE_GAP, DQNLearner, decision_scale
 from pursuit_bench.agents.fused import _dense_relu, _inputs, q_and_value_kernel
@@ -119,7 +119,7 @@ class MemberAdam:
             scalars = (f32(beta2), f32(1 - beta2), f32(self.lr / (1 - beta1**t)), f32(math.sqrt(1 - beta2**t)))
             for p, avg, avg_sq in zip(self.params, self.exp_avg, self.exp_avg_sq, strict=True):
                 assert p.grad is not None
-                _adam_step(
+                adam_step_kernel(
                     p.data[m].view(-1).numpy(),
                     p.grad[m].reshape(-1).numpy(),
                     avg[m].view(-1).numpy(),

@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+import numba
 import numpy as np
 from gymnasium import spaces
 from gymnasium.vector.utils import batch_space
@@ -22,6 +23,20 @@ from pursuit_bench.env.agent_spaces import agent_spaces
 from pursuit_bench.env.conditions import TaskConfig, resolve_condition
 from pursuit_bench.env.core import PursuitCore
 from pursuit_bench.env.world import Backend
+
+
+@numba.njit(cache=True)
+def _actions_in_range(actions, n_directions):
+    """Whether every predator's mode (``actions[:, :-1, 0]``) is 0 or 1 and every agent's
+    direction (``actions[..., 1]``) in ``0 … n_directions - 1``."""
+    arenas, agents, _ = actions.shape
+    for b in range(arenas):
+        for i in range(agents):
+            if i < agents - 1 and not 0 <= actions[b, i, 0] <= 1:
+                return False
+            if not 0 <= actions[b, i, 1] < n_directions:
+                return False
+    return True
 
 
 def put_actions(actions: np.ndarray, agent: int, env_actions: np.ndarray) -> None:
@@ -141,8 +156,7 @@ class VectorPursuitEnv:
         expected = (self.num_envs, self.n_agents, 2)
         if arr.shape != expected or arr.dtype.kind not in "iu":
             raise ValueError(f"actions: expected integers of shape {expected}, got {arr.dtype} {arr.shape}")
-        modes, directions = arr[:, :-1, 0], arr[..., 1]
-        if ((modes < 0) | (modes > 1)).any() or ((directions < 0) | (directions >= task.N_DIRECTIONS)).any():
+        if not _actions_in_range(arr, task.N_DIRECTIONS):
             raise ValueError("actions: modes must be 0 (stalk) or 1 (chase) and directions in 0..11")
         return arr
 

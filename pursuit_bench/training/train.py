@@ -410,16 +410,17 @@ class Trainer:
                     put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
 
         steps = {r: self.runs[r].env.step(actions[r]) for r in active}
+        # what each arena's agents saw next: the ended episodes' last observations where they ended
+        real_next = {}
+        for r, (next_obs, _, _, _, info) in steps.items():
+            done = info["done"]
+            real_next[r] = np.where(done[:, None, None], info["final_obs"], next_obs) if done.any() else next_obs
         for group, (obs, chosen) in zip(self.groups, decided, strict=True):
             rewards_m, next_m, terminated_m = [], [], []
             for r, i in zip(group.runs, group.indices, strict=True):
-                next_obs, rewards, terminated, _, info = steps[r]
-                done = info["done"]
-                real_next = (
-                    np.where(done[:, None], info["final_obs"][:, i], next_obs[:, i]) if done.any() else next_obs[:, i]
-                )
+                _, rewards, terminated, _, _ = steps[r]
                 rewards_m.append(rewards[:, i])
-                next_m.append(real_next)
+                next_m.append(real_next[r][:, i])
                 terminated_m.append(terminated[:, i])
             group.learner.store(obs, chosen, _stacked(rewards_m), _stacked(next_m), _stacked(terminated_m))
             losses = group.learner.train()
