@@ -10,8 +10,9 @@ Prints, each as a median of ``--repeats`` and as today / reference:
 - transitions/s (arena-steps of one run, every agent learning) of one run at the ``reproduction``
   preset (32 arenas, one update per env step) in 1p-high and in 3p-high-shared;
 - (``parts``) the milliseconds of one such env step in each of its parts (env step, acting,
-  replay sampling and priorities, storing, the update, the rest of the loop), both builds, timed
-  by wrapping the calls each part is made of, by name (a name a build lacks is skipped);
+  storing, the update with the replay's sampling and priorities, the rest of the loop), both
+  builds, timed by wrapping the calls each part is made of, by name (a name a build lacks is
+  skipped);
 - 10 seeds of 1p-high stacked in one process, and the ratio to one run alone (one after another,
   10 runs take 10 times one): ours against ours, and ours stacked against the reference alone;
 - one member-update (batch 64, the prey-sized network, replay filled) at 1 and 24 members, in ms
@@ -108,12 +109,15 @@ PARTS = {  # part -> (module, owner, attribute) of the calls timed as that part,
         ("pursuit_bench.training.train", None, "put_actions"),
         ("pursuit_bench.agents.kinds", "ScriptedAgent", "act_batch"),
     ],
-    "replay sampling + priorities": [
+    "storing": [("pursuit_bench.agents.dqn", "DQNLearner", "store")],
+    # one part: today's build samples, steps and sets the priorities in one compiled call
+    "update, with replay sampling and priorities": [
+        ("pursuit_bench.agents.dqn", "DQNLearner", "update"),
         ("pursuit_bench.agents.replay", "ReplayStack", "sample"),
         ("pursuit_bench.agents.replay", "ReplayStack", "update_priorities"),
+        ("pursuit_bench.agents.dqn", "DQNLearner", "learn"),
+        ("pursuit_bench.agents.adam", "FlatAdam", "step"),
     ],
-    "storing": [("pursuit_bench.agents.dqn", "DQNLearner", "store")],
-    "update": [("pursuit_bench.agents.dqn", "DQNLearner", "learn"), ("pursuit_bench.agents.adam", "FlatAdam", "step")],
 }
 
 def step_parts(condition, steps):

@@ -182,12 +182,18 @@ def act_kernel(flat, offsets, n_actions, obs, wall, uniforms, randoms, epsilon):
 def _backward_dense(x, grad_out, w, grad_w, grad_b):
     """Write ``x.T @ grad_out`` into grad_w and the column sums into grad_b; the input's gradient."""
     grad_w[:, :] = np.dot(x.T, grad_out)
-    for j in range(grad_out.shape[1]):
-        total = np.float32(0.0)
-        for i in range(grad_out.shape[0]):
-            total += grad_out[i, j]
-        grad_b[j] = total
+    _column_sums(grad_out, grad_b)
     return np.dot(grad_out, w.T)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _column_sums(x, out):
+    """``out[j] = x[0, j] + x[1, j] + …`` in that order, row by row (so that the columns add in
+    vector lanes side by side, each in the order of a plain loop down the column)."""
+    out[:] = np.float32(0.0)
+    for i in range(x.shape[0]):
+        for j in range(x.shape[1]):
+            out[j] += x[i, j]
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -268,11 +274,7 @@ def update_kernel(
                 if h1_s[i, k] <= 0:
                     grad_h1[i, k] = np.float32(0.0)
         gw1[:, :] = np.dot(both[:rows].T, grad_h1)
-        for k in range(TRUNK[0]):
-            total = np.float32(0.0)
-            for i in range(rows):
-                total += grad_h1[i, k]
-            gb1[k] = total
+        _column_sums(grad_h1, gb1)
     return losses, td
 
 
