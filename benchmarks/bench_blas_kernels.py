@@ -1,7 +1,8 @@
 """What the OpenBLAS pin costs on this CPU: one run's training at the ``reproduction`` preset with
 OpenBLAS's Haswell kernels (the package's pin, ``OPENBLAS_CORETYPE=Haswell``: the same bits on
-every x86 CPU since 2013) against the kernels OpenBLAS would pick here by itself, in one run of
-the benchmark, repeats interleaved.
+every x86 CPU since 2013) against another of its kernel sets (``--other``; the default, SkylakeX, is
+what OpenBLAS picks by itself on a CPU with AVX-512), in one run of the benchmark, repeats
+interleaved.
 
     python benchmarks/bench_blas_kernels.py [--repeats 5] [--steps 1500] [--other SkylakeX]
 

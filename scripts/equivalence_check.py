@@ -184,7 +184,8 @@ def main() -> None:
                 condition: {name: in_tree(tree, BITS, condition, str(args.bits)) for name, tree in trees.items()}
                 for condition in ("1p-high", "3p-high-shared")
             }
-            write_json(OUT / "equivalence-bits.json", {"steps": args.bits, "seed": 3, **compared})
+            builds = {"ours": _commit(ROOT), "reference": _commit(reference)}
+            write_json(OUT / "equivalence-bits.json", {"steps": args.bits, "seed": 3, "commits": builds, **compared})
             print(json.dumps(compared))
             return
         if args.time_only:
@@ -193,6 +194,15 @@ def main() -> None:
             print(json.dumps(timed))
             return
         run_units(args, trees)
+
+
+def _commit(tree: Path) -> str:
+    """The commit ``tree`` has checked out, with ``+changes`` when its files differ from it."""
+    head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    dirty = subprocess.run(
+        ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True
+    )
+    return head.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
 
 
 def run_units(args: argparse.Namespace, trees: dict[str, Path]) -> None:

@@ -110,16 +110,18 @@ def test_bad_batched_actions() -> None:
     actions = np.zeros((2, 2, 2), dtype=np.int64)
     actions[:, 1, 0] = 7  # the prey's mode is ignored
     vec.step(actions)
+    with pytest.raises(ValueError, match="num_envs=0"):
+        VectorPursuitEnv(0, "1p-low")
 
 
-def test_the_compiled_action_check_agrees_with_the_array_form() -> None:
+@pytest.mark.parametrize("dtype", [np.int8, np.uint8, np.int32, np.int64, np.uint64])
+def test_the_compiled_action_check_agrees_with_the_array_form(dtype: type) -> None:
     rng = np.random.default_rng(0)
-    for _ in range(500):
-        actions = rng.integers(-1, 13, size=(3, rng.integers(2, 5), 2))
+    low = 0 if np.issubdtype(dtype, np.unsignedinteger) else -1
+    for _ in range(300):
+        actions = rng.integers(low, 13, size=(3, rng.integers(2, 5), 2)).astype(dtype)
         actions[..., 0] = np.where(rng.random(actions.shape[:2]) < 0.9, actions[..., 0] % 2, actions[..., 0])
         actions[..., 1] = np.where(rng.random(actions.shape[:2]) < 0.9, actions[..., 1] % 12, actions[..., 1])
         modes, directions = actions[:, :-1, 0], actions[..., 1]
         naive = not (((modes < 0) | (modes > 1)).any() or ((directions < 0) | (directions >= 12)).any())
         assert _actions_in_range(actions, 12) == naive
-    with pytest.raises(ValueError, match="num_envs=0"):
-        VectorPursuitEnv(0, "1p-low")

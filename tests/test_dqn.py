@@ -232,3 +232,16 @@ def test_the_one_call_update_makes_the_numbers_of_sample_then_learn(prioritized:
     assert fused.updates == parts.updates == 10 and not torch.equal(
         fused.online.trunk1.weight, fused.target.trunk1.weight
     )
+
+
+def test_the_one_call_update_refuses_an_action_the_learner_has_not_and_changes_nothing() -> None:
+    learner = DQNLearner(8, 2, QUICK.replace(batch_size=16), members=2, seed=[1, 2])
+    obs = np.random.default_rng(0).normal(size=(2, 40, 8)).astype(np.float32)
+    actions = np.ones((2, 40), dtype=np.int64)
+    actions[1] = 7  # member 1 stored actions of a learner with 12: any batch of its draws one
+    learner.store(obs, actions, np.zeros((2, 40), dtype=np.float32), obs, np.zeros((2, 40), dtype=np.float32))
+    flat, priorities = learner.optimizer.flat.clone(), learner.replay.priorities.copy()
+    with pytest.raises(ValueError, match="stored actions"):
+        learner.update()
+    assert torch.equal(learner.optimizer.flat, flat) and learner.optimizer.step_count == learner.updates == 0
+    np.testing.assert_array_equal(learner.replay.priorities, priorities)

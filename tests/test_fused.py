@@ -10,6 +10,7 @@ import torch
 
 from pursuit_bench.agents.config import QUICK, REPRODUCTION, AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner
+from pursuit_bench.agents.fused import _column_sums
 from pursuit_bench.agents.replay import Batch
 
 
@@ -181,3 +182,18 @@ def test_acting_in_one_call_chooses_as_the_forward_pass_and_epsilon_greedy_do() 
     np.testing.assert_array_equal(learner.choose(q, explore=False), greedy)
     with pytest.raises(ValueError, match="expected"):
         learner.act_members(obs[:2], explore=True)
+
+
+def test_column_sums_add_each_column_in_the_order_of_a_loop_down_it() -> None:
+    x = (np.random.default_rng(0).normal(size=(64, 48)) * 10.0 ** np.arange(-3, 3).repeat(8)).astype(np.float32)
+    out = np.empty(48, dtype=np.float32)
+    _column_sums(x, out)
+    for j in range(48):
+        total = np.float32(0.0)
+        for i in range(64):
+            total = np.float32(total + x[i, j])
+        assert out[j] == total
+    backwards = np.zeros(48, dtype=np.float32)
+    for i in reversed(range(64)):
+        backwards += x[i]
+    assert not np.array_equal(out, backwards)  # the data tell the orders apart: the test can see one

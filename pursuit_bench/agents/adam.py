@@ -83,20 +83,21 @@ class FlatAdam:
 
     def step(self) -> None:
         """One Adam step over every parameter (the gradient buffer as it stands)."""
-        adam_step_kernel(*self.next_step())
-
-    def next_step(self) -> tuple[Any, ...]:
-        """Count one step and return :func:`adam_step_kernel`'s arguments for it: the buffers
-        and the step's scalars, in float32 as torch rounds them."""
-        beta1, beta2 = self.betas
+        adam_step_kernel(*self.arguments(self.step_count + 1))
         self.step_count += 1
+
+    def arguments(self, step: int) -> tuple[Any, ...]:
+        """:func:`adam_step_kernel`'s arguments for the ``step``-th step (counting from 1): the
+        buffers and the step's scalars, in float32 as torch rounds them. Counts nothing: the
+        caller adds the step to ``step_count`` once it is taken."""
+        beta1, beta2 = self.betas
         f32 = np.float32
         return (
             *self._buffers,
             f32(1 - beta1),
             f32(beta2),
             f32(1 - beta2),
-            f32(self.lr / (1 - beta1**self.step_count)),
-            f32(math.sqrt(1 - beta2**self.step_count)),
+            f32(self.lr / (1 - beta1**step)),
+            f32(math.sqrt(1 - beta2**step)),
             f32(self.eps),
         )

@@ -229,9 +229,10 @@ class DQNLearner:
         """One gradient step for every member on its own prioritized batch; losses (M,). The
         numbers of :meth:`learn` on ``replay.sample``'s batch, in one compiled call
         (:func:`~pursuit_bench.agents.fused.replay_update_kernel`)."""
+        draws = self.replay.draws(self.config.batch_size, self.rngs)  # refuses an empty replay first
         losses = replay_update_kernel(
             self.replay.arrays(),
-            self.replay.draws(self.config.batch_size, self.rngs),
+            draws,
             self.beta,
             self._flat,
             self._target_np,
@@ -241,8 +242,9 @@ class DQNLearner:
             self.config.gamma,
             self.config.huber_delta,
             self.config.wall_features,
-            self.optimizer.next_step(),
+            self.optimizer.arguments(self.optimizer.step_count + 1),
         )
+        self.optimizer.step_count += 1
         self.updates += 1
         return losses
 

@@ -8,7 +8,9 @@ together, the target network's on ``s'``, the double-DQN target, the importance-
 loss, and the backward pass written out by the chain rule, its matrix products by BLAS
 (``np.dot``), everything else in plain loops. It loops over the members, so a member's update
 never depends on how many are stacked beside it or where it sits. Adam then steps on the flat
-gradient buffer the kernel wrote (:class:`~pursuit_bench.agents.adam.FlatAdam`).
+gradient buffer the kernel wrote (:class:`~pursuit_bench.agents.adam.FlatAdam`). In training,
+:func:`replay_update_kernel` makes a learner's whole update one call: the replay's batch, this
+update, the Adam step and the new priorities.
 
 The parameters are read from the flat buffers the learner keeps
 (:func:`~pursuit_bench.agents.adam.flatten_parameters`):
@@ -286,13 +288,34 @@ def replay_update_kernel(replay, draws, beta, online, target, grad, offsets, n_a
     (:func:`~pursuit_bench.agents.adam.adam_step_kernel`, ``adam`` its buffers and scalars) and
     the new priorities: the same calls, in the same order, as ``sample``, ``learn`` and
     ``update_priorities`` made one by one, so the same numbers. ``replay`` is
-    :meth:`ReplayStack.arrays`' tuple. Returns the losses (M,)."""
-    tree, leaves, size, alpha, epsilon, prioritized, obs, actions, rewards, next_obs, terminated = replay[:11]
-    priorities, max_priority = replay[11], replay[12]
+    :meth:`ReplayStack.arrays`' tuple. Returns the losses (M,); a ValueError, as ``learn``'s, if
+    a drawn action lies outside ``0 … n_actions - 1`` (nothing is then changed).
+
+    numba's cache checks this file only: after editing the kernels it calls in ``replay.py`` or
+    ``adam.py``, touch this file (or clear the cache); until then ``tests/test_dqn.py``'s
+    comparison with the calls made one by one fails on any change of their numbers."""
+    (
+        tree,
+        leaves,
+        size,
+        alpha,
+        epsilon,
+        prioritized,
+        obs,
+        actions,
+        rewards,
+        next_obs,
+        terminated,
+        priorities,
+        max_priority,
+    ) = replay
     fractions, uniform = draws
     indices, weights, b_obs, b_actions, b_rewards, b_next, b_terminated = sample_kernel(
         tree, leaves, size, beta, fractions, uniform, obs, actions, rewards, next_obs, terminated
     )
+    for action in b_actions.ravel():
+        if not 0 <= action < n_actions:
+            raise ValueError("stored actions: expected values in [0, n_actions) of this learner")
     losses, td = update_kernel(
         online,
         target,

@@ -452,11 +452,11 @@ class ReplayStack:
             raise ValueError("sample() from an empty replay: add transitions first")
         if not self.prioritized:
             uniform = np.empty((self.members, batch_size), dtype=np.int64)
-            for m, rng in enumerate(rngs):
+            for m, rng in zip(range(self.members), rngs, strict=True):
                 uniform[m] = rng.integers(0, self.size, size=batch_size)
             return np.empty((self.members, 0)), uniform
         fractions = np.empty((self.members, batch_size))
-        for m, rng in enumerate(rngs):
+        for m, rng in zip(range(self.members), rngs, strict=True):
             fractions[m] = rng.random(batch_size)
         return fractions, np.empty((self.members, 0), dtype=np.int64)
 
