@@ -197,10 +197,13 @@ def main() -> None:
 
 
 def _commit(tree: Path) -> str:
-    """The commit ``tree`` has checked out, with ``+changes`` when its files differ from it."""
+    """The commit ``tree`` has checked out, with ``+changes`` when its package (``pursuit_bench/``)
+    differs from that commit's."""
     head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
     dirty = subprocess.run(
-        ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True
+        ["git", "-C", str(tree), "status", "--porcelain", "--untracked-files=no", "--", "pursuit_bench"],
+        capture_output=True,
+        text=True,
     )
     return head.stdout.strip() + ("+changes" if dirty.stdout.strip() else "")
 
