@@ -24,38 +24,29 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_speed import ONE_THREAD, measure  # noqa: E402  (its worker's one-run rate, timed by CPU time)
 
-#: ``python -c WORKER CONDITION STEPS``: one run's transitions/s by the CPU time, and the kernels.
-WORKER = r"""
-import json, sys, time
-import torch
-torch.set_num_threads(1)
+#: ``python -c KERNELS``: the kernels every loaded OpenBLAS reports once the compiled update's is loaded.
+KERNELS = r"""
+import json
+import pursuit_bench.agents.fused
 from threadpoolctl import threadpool_info
-from pursuit_bench.agents.config import REPRODUCTION
-from pursuit_bench.training.train import TrainConfig, Trainer
-
-condition, steps = sys.argv[1], int(sys.argv[2])
-agent = REPRODUCTION.replace(learning_starts=500)
-trainer = Trainer(TrainConfig(condition=condition, agent=agent, num_envs=32, seed=0, episodes=10**9))
-while trainer.groups[0].learner.steps < agent.learning_starts + 32:
-    trainer.step()  # the replays past learning_starts: we time learning, not warm-up
-start = time.process_time()
-for _ in range(steps):
-    trainer.step()
-rate = steps * 32 / (time.process_time() - start)
-kernels = sorted({i["architecture"] for i in threadpool_info() if i["internal_api"] == "openblas"})
-print(json.dumps({"rate": rate, "kernels": kernels}))
+print(json.dumps(sorted({i["architecture"] for i in threadpool_info() if i["internal_api"] == "openblas"})))
 """
 
-ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+def rate(coretype: str, condition: str, steps: int) -> float:
+    """One run's transitions/s with OpenBLAS's ``coretype`` kernels (``bench_speed``'s worker)."""
+    os.environ["OPENBLAS_CORETYPE"] = coretype  # the worker inherits it
+    answer = measure(ROOT, "train", condition, "1", str(steps))
+    assert isinstance(answer, float)
+    return answer
 
 
-def measure(coretype: str, condition: str, steps: int) -> dict:
+def kernels(coretype: str) -> list[str]:
     env = {**os.environ, **ONE_THREAD, "OPENBLAS_CORETYPE": coretype}
-    command = [sys.executable, "-c", WORKER, condition, str(steps)]
-    done = subprocess.run(command, env=env, capture_output=True, text=True)
-    if done.returncode != 0:
-        raise SystemExit(f"worker {coretype} {condition} failed:\n{done.stderr}")
+    done = subprocess.run([sys.executable, "-c", KERNELS], env=env, capture_output=True, text=True, check=True)
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -69,19 +60,16 @@ def main() -> None:
     print(f"one run alone, reproduction preset, 32 arenas; medians of {args.repeats}, CPU time, one thread")
     print(f"\n| condition | {settings[0]} (transitions/s) | {settings[1]} | {settings[1]} / {settings[0]} |")
     print("|---|---:|---:|---:|")
-    reported = {}
     for condition in ("1p-high", "3p-high-shared"):
         rates: dict[str, list[float]] = {s: [] for s in settings}
         for _ in range(args.repeats):
             for setting in settings:
-                answer = measure(setting, condition, args.steps)
-                rates[setting].append(answer["rate"])
-                reported[setting] = answer["kernels"]
+                rates[setting].append(rate(setting, condition, args.steps))
         pinned, other = (statistics.median(rates[s]) for s in settings)
         print(f"| {condition} | {pinned:,.0f} | {other:,.0f} | {other / pinned:.2f}x |")
     print()
     for setting in settings:
-        print(f"OPENBLAS_CORETYPE={setting}: the loaded OpenBLAS libraries report {', '.join(reported[setting])}")
+        print(f"OPENBLAS_CORETYPE={setting}: the loaded OpenBLAS libraries report {', '.join(kernels(setting))}")
 
 
 if __name__ == "__main__":
