@@ -22,10 +22,12 @@ from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.fused import (
     act_kernel,
     choose_kernel,
+    exploration_kernel,
     q_and_value_kernel,
     replay_update_kernel,
     update_kernel,
 )
+from pursuit_bench.agents.generators import CompiledGenerators
 from pursuit_bench.agents.network import DuelingQNetwork, member_seeds
 from pursuit_bench.agents.replay import Batch, ReplayStack
 
@@ -113,6 +115,7 @@ class DQNLearner:
             prioritized=config.prioritized,
         )
         self.rngs = [np.random.default_rng(s) for s in seeds]  # exploration and replay sampling
+        self._compiled_rngs = CompiledGenerators()
         self.steps = 0  # transitions stored per member
         self.updates = 0
         self._owed_updates = 0.0  # replay_ratio × transitions, not yet done
@@ -181,23 +184,28 @@ class DQNLearner:
         return choose_kernel(q, *self._exploration(q.shape[1], explore, epsilon))
 
     def _exploration(self, rows: int, explore: bool, epsilon: float | None) -> tuple[np.ndarray, np.ndarray, float]:
-        """The draws of ε-greedy for ``rows`` choices per member: member m's uniforms, then its
-        random actions, both from its own generator; empty arrays when not ``explore``."""
+        """The draws of ε-greedy for ``rows`` choices per member (:func:`exploration_kernel`:
+        member m's uniforms, then its random actions, both from its own generator) and ε; empty
+        arrays when not ``explore``."""
         if not explore:
             return np.empty((self.members, 0)), np.empty((self.members, 0), dtype=np.int64), 0.0
-        uniforms = np.empty((self.members, rows))
-        randoms = np.empty((self.members, rows), dtype=np.int64)
-        for m, rng in enumerate(self.rngs):
-            uniforms[m] = rng.random(rows)
-            randoms[m] = rng.integers(0, self.n_actions, size=rows)
+        uniforms, randoms = exploration_kernel(self.generators(), rows, self.n_actions)
         return uniforms, randoms, self.epsilon if epsilon is None else epsilon
+
+    def generators(self) -> Any:
+        """The members' generators (``rngs``) as the compiled kernels take them: the same objects,
+        so that a draw in a kernel moves them on as numpy's would."""
+        return self._compiled_rngs.of(self.rngs)
 
     def act_members(self, obs: np.ndarray, *, explore: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Actions (M, B), Q-values (M, B, A) and V(s) (M, B) for observations (M, B, n_obs): the
         training loop's acting step, :meth:`act_values` and :meth:`choose` in one compiled call."""
         obs = self._checked(np.ascontiguousarray(obs, dtype=np.float32), "obs")
-        draws = self._exploration(obs.shape[1], explore, None)
-        return act_kernel(self._flat, self._offsets, self.n_actions, obs, self.config.wall_features, *draws)
+        if not explore:
+            q, value = q_and_value_kernel(self._flat, self._offsets, self.n_actions, obs, self.config.wall_features)
+            return self.choose(q, explore=False), q, value
+        wall, epsilon = self.config.wall_features, self.epsilon
+        return act_kernel(self._flat, self._offsets, self.n_actions, obs, wall, self.generators(), epsilon)
 
     def act(self, obs: np.ndarray, *, explore: bool, epsilon: float | None = None) -> np.ndarray:
         """Actions (M, B) for observations (M, B, n_obs); see :meth:`choose`."""
@@ -229,10 +237,11 @@ class DQNLearner:
         """One gradient step for every member on its own prioritized batch; losses (M,). The
         numbers of :meth:`learn` on ``replay.sample``'s batch, in one compiled call
         (:func:`~pursuit_bench.agents.fused.replay_update_kernel`)."""
-        draws = self.replay.draws(self.config.batch_size, self.rngs)  # refuses an empty replay first
+        self.replay.check_drawable(len(self.rngs))  # an empty replay is refused before any draw
         losses = replay_update_kernel(
             self.replay.arrays(),
-            draws,
+            self.generators(),
+            self.config.batch_size,
             self.beta,
             self._flat,
             self._target_np,

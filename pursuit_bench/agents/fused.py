@@ -33,7 +33,7 @@ from threadpoolctl import ThreadpoolController
 
 from pursuit_bench.agents.adam import adam_step_kernel
 from pursuit_bench.agents.network import HEAD, TRUNK
-from pursuit_bench.agents.replay import sample_kernel, update_priorities_kernel
+from pursuit_bench.agents.replay import draws_kernel, sample_kernel, update_priorities_kernel
 
 
 def _one_thread_for_scipys_blas() -> None:
@@ -172,11 +172,27 @@ def choose_kernel(q, uniforms, randoms, epsilon):
     return choices
 
 
+@numba.njit(cache=True)
+def exploration_kernel(generators, rows, n_actions):
+    """The draws of ε-greedy for ``rows`` choices per member, from the members' generators (a
+    typed list, :mod:`~pursuit_bench.agents.generators`): member m's ``rows`` uniforms, then its
+    ``rows`` random actions, both from ``generators[m]``; (M, rows) each."""
+    members = len(generators)
+    uniforms = np.empty((members, rows))
+    randoms = np.empty((members, rows), dtype=np.int64)
+    for m in range(members):
+        uniforms[m] = generators[m].random(rows)
+        randoms[m] = generators[m].integers(0, n_actions, rows)
+    return uniforms, randoms
+
+
 @numba.njit(cache=True, error_model="numpy")
-def act_kernel(flat, offsets, n_actions, obs, wall, uniforms, randoms, epsilon):
-    """:func:`q_and_value_kernel` for every member, then :func:`choose_kernel`: the actions
-    (M, B), Q-values (M, B, A) and V(s) (M, B) of one acting step."""
+def act_kernel(flat, offsets, n_actions, obs, wall, generators, epsilon):
+    """:func:`q_and_value_kernel` for every member, then :func:`choose_kernel` ε-greedy on the
+    draws of :func:`exploration_kernel`: the actions (M, B), Q-values (M, B, A) and V(s) (M, B)
+    of one acting step."""
     q, value = q_and_value_kernel(flat, offsets, n_actions, obs, wall)
+    uniforms, randoms = exploration_kernel(generators, obs.shape[1], n_actions)
     return choose_kernel(q, uniforms, randoms, epsilon), q, value
 
 
@@ -281,15 +297,19 @@ def update_kernel(
 
 
 @numba.njit(cache=True, error_model="numpy")
-def replay_update_kernel(replay, draws, beta, online, target, grad, offsets, n_actions, gamma, delta, wall, adam):
-    """One whole update of every member, in one call: the batch drawn from the replay
-    (:func:`~pursuit_bench.agents.replay.sample_kernel` on ``draws``, the members' uniforms made
-    by the caller), the loss and gradient (:func:`update_kernel`), the Adam step
+def replay_update_kernel(
+    replay, generators, batch_size, beta, online, target, grad, offsets, n_actions, gamma, delta, wall, adam
+):
+    """One whole update of every member, in one call: the members' uniforms
+    (:func:`~pursuit_bench.agents.replay.draws_kernel`, from ``generators``, a typed list), the
+    batch drawn from the replay (:func:`~pursuit_bench.agents.replay.sample_kernel`), the loss
+    and gradient (:func:`update_kernel`), the Adam step
     (:func:`~pursuit_bench.agents.adam.adam_step_kernel`, ``adam`` its buffers and scalars) and
     the new priorities: the same calls, in the same order, as ``sample``, ``learn`` and
     ``update_priorities`` made one by one, so the same numbers. ``replay`` is
-    :meth:`ReplayStack.arrays`' tuple. Returns the losses (M,); a ValueError, as ``learn``'s, if
-    a drawn action lies outside ``0 … n_actions - 1`` (nothing is then changed).
+    :meth:`ReplayStack.arrays`' tuple, and must hold transitions. Returns the losses (M,); a
+    ValueError, as ``learn``'s, if a drawn action lies outside ``0 … n_actions - 1`` (nothing but
+    the generators has then moved on).
 
     numba's cache checks this file only: after editing the kernels it calls in ``replay.py`` or
     ``adam.py``, touch this file (or clear the cache); until then ``tests/test_dqn.py``'s
@@ -309,7 +329,7 @@ def replay_update_kernel(replay, draws, beta, online, target, grad, offsets, n_a
         priorities,
         max_priority,
     ) = replay
-    fractions, uniform = draws
+    fractions, uniform = draws_kernel(generators, batch_size, size, prioritized)
     indices, weights, b_obs, b_actions, b_rewards, b_next, b_terminated = sample_kernel(
         tree, leaves, size, beta, fractions, uniform, obs, actions, rewards, next_obs, terminated
     )

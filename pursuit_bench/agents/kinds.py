@@ -112,7 +112,10 @@ class HierarchicalPredator(LearningAgent):
         self.avoidance = avoidance
 
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        return np.stack([choices, navigate(obs, choices, avoidance=self.avoidance)], axis=-1)
+        actions = np.empty((*np.shape(choices), 2), dtype=np.int64)  # np.stack's result, for less
+        actions[..., 0] = choices
+        actions[..., 1] = navigate(obs, choices, avoidance=self.avoidance)
+        return actions
 
     @staticmethod
     def mode_q(q: np.ndarray) -> np.ndarray:

@@ -23,6 +23,8 @@ from typing import Any, Literal, Protocol
 import numba
 import numpy as np
 
+from pursuit_bench.agents.generators import compiled_generators
+
 #: Above this capacity the sum tree replaces the flat cumulative sum.
 TREE_ABOVE = 65_536
 
@@ -362,6 +364,23 @@ def sample_kernel(tree, leaves, size, beta, fractions, uniform, obs, actions, re
 
 
 @numba.njit(cache=True)
+def draws_kernel(generators, batch_size, size, prioritized):
+    """The uniforms of one sample, member m's drawn from ``generators[m]`` (a typed list,
+    :mod:`~pursuit_bench.agents.generators`): ``(fractions, uniform)``, the fractions (M, B) of
+    the tree descents when prioritized, else the slots (M, B) drawn uniformly from ``0 … size -
+    1`` (the other of the two empty), as :func:`sample_kernel` takes them."""
+    members = len(generators)
+    fractions = np.empty((members, batch_size if prioritized else 0))
+    uniform = np.empty((members, 0 if prioritized else batch_size), dtype=np.int64)
+    for m in range(members):
+        if prioritized:
+            fractions[m] = generators[m].random(batch_size)
+        else:
+            uniform[m] = generators[m].integers(0, size, batch_size)
+    return fractions, uniform
+
+
+@numba.njit(cache=True)
 def update_priorities_kernel(priorities, tree, leaves, alpha, epsilon, max_priority, indices, td_errors):
     """Member m's slots ``indices[m]`` to priorities ``|δ| + ε`` (in order: a slot drawn twice
     keeps its last), the trees updated and each member's largest priority raised."""
@@ -442,9 +461,9 @@ class ReplayStack:
         self.position = int((self.position + k) % self.capacity)
         self.size = min(self.size + k, self.capacity)
 
-    def sample(self, batch_size: int, beta: float, rngs: list[np.random.Generator]) -> Batch:
+    def sample(self, batch_size: int, beta: float, rngs: Any) -> Batch:
         """``batch_size`` transitions per member (with replacement), member m drawing from
-        ``rngs[m]``; every array of the batch has the member axis first, (M, B, …)."""
+        ``rngs[m]`` (see :meth:`draws`); every array of the batch has the member axis first, (M, B, …)."""
         fractions, uniform = self.draws(batch_size, rngs)
         arrays = self.obs, self.actions, self.rewards, self.next_obs, self.terminated
         indices, weights, obs, actions, rewards, next_obs, terminated = sample_kernel(
@@ -452,21 +471,19 @@ class ReplayStack:
         )
         return Batch(indices, obs, actions, rewards, next_obs, terminated, weights)
 
-    def draws(self, batch_size: int, rngs: list[np.random.Generator]) -> tuple[np.ndarray, np.ndarray]:
-        """The uniforms of one sample, member m's from ``rngs[m]``: ``(fractions, uniform)``, the
-        fractions (M, B) of the tree descents when prioritized, else the slots (M, B) drawn
-        uniformly (the other of the two empty), as :func:`sample_kernel` takes them."""
+    def draws(self, batch_size: int, rngs: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The uniforms of one sample, member m's from ``rngs[m]`` (a list of generators, or
+        their :mod:`~pursuit_bench.agents.generators` typed list): ``(fractions, uniform)``, as
+        :func:`draws_kernel` gives them."""
+        self.check_drawable(len(rngs))
+        return draws_kernel(compiled_generators(rngs), batch_size, self.size, self.prioritized)
+
+    def check_drawable(self, generators: int) -> None:
+        """What a sample needs: transitions, and a generator per member (ValueError otherwise)."""
         if self.size == 0:
             raise ValueError("sample() from an empty replay: add transitions first")
-        if not self.prioritized:
-            uniform = np.empty((self.members, batch_size), dtype=np.int64)
-            for m, rng in zip(range(self.members), rngs, strict=True):
-                uniform[m] = rng.integers(0, self.size, size=batch_size)
-            return np.empty((self.members, 0)), uniform
-        fractions = np.empty((self.members, batch_size))
-        for m, rng in zip(range(self.members), rngs, strict=True):
-            fractions[m] = rng.random(batch_size)
-        return fractions, np.empty((self.members, 0), dtype=np.int64)
+        if generators != self.members:
+            raise ValueError(f"{generators} generators for {self.members} members: expected one per member")
 
     def arrays(self) -> tuple[Any, ...]:
         """What the compiled update (:func:`pursuit_bench.agents.fused.replay_update_kernel`) reads

@@ -316,7 +316,7 @@ class ResidualLearner(DQNLearner):
     def update(self) -> np.ndarray:
         """One step of the mode learner on its prioritized batch (the corrected transitions in
         it weighted 0, their priorities set to ε); its losses (M,)."""
-        batch = self.replay.sample(self.config.batch_size, self.beta, self.rngs)
+        batch = self.replay.sample(self.config.batch_size, self.beta, self.generators())
         modes, j = np.divmod(batch.actions, _PER_MODE)
         corrected = j != 0
         batch.actions, batch.weights = modes, np.where(corrected, np.float32(0.0), batch.weights)

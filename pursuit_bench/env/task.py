@@ -237,35 +237,28 @@ def _outcome_kernel(wall, prey, modes, chase_cost, shared, walls_end, rewards, t
 
 
 @numba.njit(cache=True)
-def _finish_kernel(
-    wall,
-    prey,
-    modes,
-    chase_cost,
-    shared,
-    walls_end,
-    steps,
-    max_steps,
-    z,
-    w,
-    rewards,
-    terminated,
-    truncated,
-    captured,
-    obs,
-    los,
-    distance,
-):
+def _finish_kernel(wall, prey, modes, chase_cost, shared, walls_end, steps, max_steps, z, w, n_obs):
+    """Rewards, terminated, truncated, captured, observations (with ``n_obs`` columns: room for
+    the range readings, filled by the caller), LOS and distances to the prey of one step's end."""
+    batch, n = z.shape
+    rewards = np.empty((batch, n))
+    terminated = np.empty(batch, dtype=np.bool_)
+    truncated = np.empty(batch, dtype=np.bool_)
+    captured = np.empty(batch, dtype=np.bool_)
+    obs = np.empty((batch, n, n_obs), dtype=np.float32)
+    los = np.empty((batch, n), dtype=np.complex128)
+    distance = np.empty((batch, n))
     _outcome_kernel(wall, prey, modes, chase_cost, shared, walls_end, rewards, terminated, captured)
     _observe_kernel(z, w, obs, los)
-    n_pred = z.shape[1] - 1
-    for b in range(z.shape[0]):
+    n_pred = n - 1
+    for b in range(batch):
         truncated[b] = steps[b] >= max_steps and not terminated[b]
         nearest = np.inf
         for i in range(n_pred):
             distance[b, i] = abs(z[b, i] - z[b, n_pred])
             nearest = min(nearest, distance[b, i])
         distance[b, n_pred] = nearest
+    return rewards, terminated, truncated, captured, obs, los, distance
 
 
 def _reward_rules(
@@ -302,33 +295,25 @@ def finish_step(
 ) -> Finish:
     """:func:`outcome`, truncation after ``config.max_steps`` and :func:`observe` (with the range
     readings given ``obstacles``), in one call."""
-    batch, n, _ = positions.shape
+    n = positions.shape[1]
     z = as_complex(positions)
-    out = Finish(
-        outcome=Outcome(rewards=np.empty((batch, n)), terminated=np.empty(batch, bool), captured=np.empty(batch, bool)),
-        truncated=np.empty(batch, dtype=bool),
-        observations=np.empty((batch, n, obs_size(n, obstacles is not None)), dtype=np.float32),
-        los=np.empty((batch, n), dtype=np.complex128),
-        distance_to_prey=np.empty((batch, n)),
-    )
-    _finish_kernel(
+    rewards, terminated, truncated, captured, obs, los, distance = _finish_kernel(
         *_reward_rules(config, contacts, modes),
         steps,
         config.max_steps,
         z,
         as_complex(velocities),
-        out.outcome.rewards,
-        out.outcome.terminated,
-        out.truncated,
-        out.outcome.captured,
-        out.observations,
-        out.los,
-        out.distance_to_prey,
+        obs_size(n, obstacles is not None),
     )
     if obstacles is not None:
-        range_readings(z, out.los, obstacles, ROTATIONS, out.observations[..., obs_size(n) :])
-    out.los = as_xy(out.los)
-    return out
+        range_readings(z, los, obstacles, ROTATIONS, obs[..., obs_size(n) :])
+    return Finish(
+        outcome=Outcome(rewards=rewards, terminated=terminated, captured=captured),
+        truncated=truncated,
+        observations=obs,
+        los=as_xy(los),
+        distance_to_prey=distance,
+    )
 
 
 def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcome:

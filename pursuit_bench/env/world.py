@@ -105,7 +105,20 @@ class World(Protocol):
 
 def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
     """``v' = (1 - DAMPING) v + a DT``, the velocity half of the dynamics."""
-    return (1.0 - DAMPING) * velocities + accelerations * DT
+    out = np.empty((velocities.shape[0] * velocities.shape[1], 2))
+    _integrate_kernel(velocities, accelerations, 1.0 - DAMPING, DT, out)
+    return out.reshape(velocities.shape)
+
+
+@numba.njit(cache=True)
+def _integrate_kernel(velocities, accelerations, keep, dt, out):
+    """:func:`integrate_velocity` of (B, n, 2) arrays into ``out``'s rows (B·n, 2), which may be
+    a strided view (pymunk's buffer)."""
+    n = velocities.shape[1]
+    for b in range(velocities.shape[0]):
+        for i in range(n):
+            for d in range(2):
+                out[b * n + i, d] = keep * velocities[b, i, d] + accelerations[b, i, d] * dt
 
 
 @numba.njit(cache=True)
@@ -180,7 +193,46 @@ def leave_obstacles(
 
 def _prey_overlap(positions: np.ndarray) -> np.ndarray:
     delta = positions[:, :-1] - positions[:, -1:]
-    return (delta * delta).sum(axis=-1) < (2 * RADIUS) ** 2
+    return (delta * delta).sum(axis=-1) < _CAPTURE_REACH_SQUARED
+
+
+#: A predator overlaps the prey when their centres are closer than two radii: that distance squared.
+_CAPTURE_REACH_SQUARED = (2 * RADIUS) ** 2
+
+
+@numba.njit(cache=True)
+def _settle_kernel(state, offsets, relative, obstacles, limit, tolerance, contain, captured, reach_squared):
+    """What :meth:`PymunkWorld.step` does after pymunk's step, in one pass: each arena's
+    positions (``relative``: less its offset) and velocities from pymunk's body rows ``state``
+    (B·n, 4), the obstacles and the walls (:func:`leave_obstacles`, then :func:`touch_walls`, in
+    place), and the captures: pymunk's (``captured`` (B, n - 1), its contact callback's), decided
+    again on the final positions in an arena whose disks were put back. Returns positions,
+    velocities, wall, prey and obstacle contacts, and whether any arena had a disk put back."""
+    arenas, n = captured.shape[0], captured.shape[1] + 1
+    positions = np.empty((arenas, n, 2))
+    velocities = np.empty((arenas, n, 2))
+    for b in range(arenas):
+        for i in range(n):
+            for d in range(2):
+                x = state[b * n + i, d]
+                positions[b, i, d] = x - offsets[b * n + i, d] if relative else x
+                velocities[b, i, d] = state[b * n + i, 2 + d]
+    obstacle = np.empty((arenas, n), dtype=np.bool_)
+    pushed = np.empty(arenas, dtype=np.bool_)
+    _leave_obstacles_kernel(positions, velocities, obstacles, tolerance, obstacle, pushed)
+    wall = np.empty((arenas, n), dtype=np.bool_)
+    moved = np.empty(arenas, dtype=np.bool_)
+    _touch_walls_kernel(positions, velocities, limit, tolerance, contain, wall, moved)
+    prey = captured.copy()
+    any_moved = False
+    for b in range(arenas):
+        if moved[b] or pushed[b]:
+            any_moved = True
+            for i in range(n - 1):  # as _prey_overlap
+                dx = positions[b, i, 0] - positions[b, n - 1, 0]
+                dy = positions[b, i, 1] - positions[b, n - 1, 1]
+                prey[b, i] = dx * dx + dy * dy < reach_squared
+    return positions, velocities, wall, prey, obstacle, any_moved
 
 
 class NumpyWorld:
@@ -349,14 +401,12 @@ class PymunkWorld:
         self._prey[arena, agent] = True
         arbiter.process_collision = False
 
-    def _read(self) -> None:
+    def _bodies_state(self) -> np.ndarray:
+        """(B·n, 4) every disk's absolute position and velocity as pymunk holds them (a view of
+        pymunk's memory: valid until the next read)."""
         self._read_buffer.clear()
         pymunk.batch.get_space_bodies(self.space, _POSITION_VELOCITY, self._read_buffer)
-        state = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
-        shape = (self.num_arenas, self.n_agents, 2)
-        positions = state[:, :2] - self._offsets_per_body if self._offset else state[:, :2].copy()
-        self.positions = positions.reshape(shape)
-        self.velocities = state[:, 2:].reshape(shape).copy()
+        return np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
 
     def reset(self, arenas: np.ndarray, positions: np.ndarray, obstacles: np.ndarray | None = None) -> None:
         self.positions[arenas] = positions
@@ -379,9 +429,7 @@ class PymunkWorld:
         (absolute positions: relative ones plus the arena's offset need not give back the same
         bits). Not pymunk's contact caches: a contact under way at a restore may resolve in
         other last bits (:meth:`restore`)."""
-        self._read_buffer.clear()
-        pymunk.batch.get_space_bodies(self.space, _POSITION_VELOCITY, self._read_buffer)
-        bodies = np.frombuffer(self._read_buffer.float_buf(), dtype=np.float64).reshape(-1, 4)[: self._bodies]
+        bodies = self._bodies_state()
         return {
             "positions": self.positions.copy(),
             "velocities": self.velocities.copy(),
@@ -400,33 +448,39 @@ class PymunkWorld:
         self.velocities = np.array(state["velocities"], dtype=np.float64)
         self._moved = bool(state["moved"])
 
-    def _write(self, velocities: np.ndarray) -> None:
-        """Give pymunk the velocities for this step, and the positions too if we moved disks
-        (a reset, or putting them back at a wall) since it last stepped."""
+    def _write(self, accelerations: np.ndarray) -> None:
+        """Give pymunk this step's velocities (:func:`integrate_velocity`, written straight into
+        the buffer it reads), and the positions too if we moved disks (a reset, or putting them
+        back at a wall) since it last stepped."""
+        keep = 1.0 - DAMPING
         if self._moved:
             flat = self._state
             flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body
-            flat[:-1, 2:] = velocities.reshape(-1, 2)
+            _integrate_kernel(self.velocities, accelerations, keep, DT, flat[:-1, 2:])
             pymunk.batch.set_space_bodies(self.space, _POSITION_VELOCITY, self._state_buffer)
             self._moved = False
         else:
-            self._velocity[:-1] = velocities.reshape(-1, 2)
+            _integrate_kernel(self.velocities, accelerations, keep, DT, self._velocity[:-1])
             pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._velocity_buffer)
 
     def step(self, accelerations: np.ndarray) -> Contacts:
         self._prey.fill(False)
-        self._write(integrate_velocity(self.velocities, accelerations))
+        self._write(accelerations)
         self.space.step(DT)
-        self._read()
-        obstacle, pushed = leave_obstacles(self.positions, self.velocities, self.obstacles)
-        wall, moved = touch_walls(self.positions, self.velocities, self.limit, self.wall_rule)
-        moved |= pushed
-        prey = self._prey.copy()
-        if moved.any():
-            self._moved = True
-            # pymunk saw those arenas before their disks were put back: decide their captures
-            # on the positions the step ends with
-            prey[moved] = _prey_overlap(self.positions[moved])
+        # pymunk saw the arenas whose disks we put back at a wall or an obstacle before we did:
+        # their captures are decided on the positions the step ends with
+        self.positions, self.velocities, wall, prey, obstacle, moved = _settle_kernel(
+            self._bodies_state(),
+            self._offsets_per_body,
+            self._offset,
+            self.obstacles,
+            self.limit,
+            CONTACT_TOLERANCE,
+            self.wall_rule == "contain",
+            self._prey,
+            _CAPTURE_REACH_SQUARED,
+        )
+        self._moved = moved
         return Contacts(wall=wall, prey=prey, obstacle=obstacle)
 
 

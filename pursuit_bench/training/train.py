@@ -295,8 +295,14 @@ def _as_arrays(value: Any) -> Any:
 
 
 def _stacked(arrays: list[np.ndarray]) -> np.ndarray:
-    """``np.stack(arrays)``; a view of the one array when there is one (a run alone)."""
-    return arrays[0][None] if len(arrays) == 1 else np.stack(arrays)
+    """``np.stack(arrays)`` of arrays of one shape and type (each member's rows of the same
+    kind); a view of the one array when there is one (a run alone)."""
+    if len(arrays) == 1:
+        return arrays[0][None]
+    stacked = np.empty((len(arrays), *arrays[0].shape), dtype=arrays[0].dtype)
+    for k, array in enumerate(arrays):
+        stacked[k] = array
+    return stacked
 
 
 def _per_run(value: Any, k: int, what: str) -> list[Any]:
