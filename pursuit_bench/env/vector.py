@@ -183,11 +183,11 @@ class VectorPursuitEnv:
             "episode_length": self.core.steps.copy(),
         }
         obs = result.observations
-        if done.any():
-            ended = np.flatnonzero(done)
+        ended = done.nonzero()[0]
+        if len(ended):
             obs = obs.copy()  # the ended episodes' last observations stay in the info
             obs[ended] = self.core.reset(ended, [self._rngs[i] for i in ended])
             self._returns[ended] = 0.0
-        terminated = np.repeat(result.terminated[:, None], self.n_agents, axis=1)
-        truncated = np.repeat(result.truncated[:, None], self.n_agents, axis=1)
+        terminated = result.terminated.repeat(self.n_agents).reshape(self.num_envs, self.n_agents)
+        truncated = result.truncated.repeat(self.n_agents).reshape(self.num_envs, self.n_agents)
         return obs, result.rewards, terminated, truncated, info
