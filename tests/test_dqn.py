@@ -245,3 +245,9 @@ def test_the_one_call_update_refuses_an_action_the_learner_has_not_and_changes_n
         learner.update()
     assert torch.equal(learner.optimizer.flat, flat) and learner.optimizer.step_count == learner.updates == 0
     np.testing.assert_array_equal(learner.replay.priorities, priorities)
+
+
+@pytest.mark.parametrize("n_actions", [0, -2, 2.0, True])
+def test_a_learner_needs_at_least_one_action(n_actions: object) -> None:
+    with pytest.raises(ValueError, match="n_actions"):
+        DQNLearner(4, n_actions, QUICK)  # type: ignore[arg-type]

@@ -112,3 +112,14 @@ def test_finished_runs_leave_the_stack_without_changing_anyone() -> None:
         np.testing.assert_array_equal(
             finished.runs[place].agents["predator_0"].act_batch(obs), alone.agents["predator_0"].act_batch(obs)
         )
+
+
+def test_rows_of_different_shapes_or_types_are_not_stacked() -> None:
+    from pursuit_bench.training.train import _stacked
+
+    rows = np.arange(6.0).reshape(3, 2)
+    np.testing.assert_array_equal(_stacked([rows, rows + 1]), np.stack([rows, rows + 1]))
+    assert np.shares_memory(_stacked([rows]), rows)  # a run alone: a view, no copy
+    for other in (rows[:1], rows.astype(np.float32)):
+        with pytest.raises(ValueError, match="one shape and type"):
+            _stacked([rows, other])

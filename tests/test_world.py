@@ -119,3 +119,16 @@ def test_capture_is_decided_after_a_disk_is_put_back(backend: str, wall_rule: st
     contacts = world.step(np.zeros((1, 2, 2)))
     assert world.positions[0, 1, 1] == pytest.approx(1 - RADIUS)
     assert contacts.wall[0, 1] and contacts.prey[0, 0]
+
+
+@pytest.mark.parametrize("backend", ["pymunk", "numpy"])
+def test_accelerations_of_another_shape_are_refused_not_broadcast(backend: str) -> None:
+    """The compiled integration reads one acceleration per disk: a shape that numpy would have
+    broadcast is a ValueError, and float32 accelerations are taken as float64."""
+    world = make_world(backend, 3, 2)
+    world.reset(np.arange(3), np.zeros((3, 2, 2)))
+    with pytest.raises(ValueError, match=r"accelerations of shape \(1, 2, 2\): expected \(3, 2, 2\)"):
+        world.step(np.ones((1, 2, 2)))
+    accelerations = np.random.default_rng(0).normal(size=(3, 2, 2))
+    world.step(accelerations.astype(np.float32))
+    np.testing.assert_array_equal(world.velocities, accelerations.astype(np.float32).astype(np.float64) * DT)

@@ -93,6 +93,8 @@ class DQNLearner:
     def __init__(
         self, n_obs: int, n_actions: int, config: AgentConfig, *, members: int = 1, seed: int | Sequence[int] = 0
     ) -> None:
+        if isinstance(n_actions, bool) or not isinstance(n_actions, (int, np.integer)) or n_actions < 1:
+            raise ValueError(f"n_actions={n_actions!r}: expected an integer >= 1")
         self.config, self.members, self.n_obs, self.n_actions = config, members, n_obs, n_actions
         seeds = member_seeds(seed, members)
         n_inputs = n_obs + (WALL_FEATURES if config.wall_features else 0)
@@ -199,7 +201,9 @@ class DQNLearner:
 
     def act_members(self, obs: np.ndarray, *, explore: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Actions (M, B), Q-values (M, B, A) and V(s) (M, B) for observations (M, B, n_obs): the
-        training loop's acting step, :meth:`act_values` and :meth:`choose` in one compiled call."""
+        training loop's acting step, :meth:`act_values` and :meth:`choose` in one compiled call
+        when ``explore`` (the ε-greedy draws made in it); greedy, the forward pass and then the
+        choice."""
         obs = self._checked(np.ascontiguousarray(obs, dtype=np.float32), "obs")
         if not explore:
             q, value = q_and_value_kernel(self._flat, self._offsets, self.n_actions, obs, self.config.wall_features)

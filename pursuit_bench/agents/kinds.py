@@ -50,7 +50,7 @@ class LearningAgent:
         return DQNLearner(n_obs, cls.n_actions, config, members=members, seed=seed)
 
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        """Env actions for the network's choices (B,) given the observations (B, n_obs)."""
+        """Env actions for the network's choices (B,), integers, given the observations (B, n_obs)."""
         raise NotImplementedError
 
     def decide(

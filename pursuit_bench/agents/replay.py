@@ -254,7 +254,8 @@ def _tree_set(tree, leaves, slots, values):
 @numba.njit(cache=True)
 def _tree_draw(tree, leaves, fractions):
     """Slots (M, B) drawn in proportion to the leaves, ``fractions`` uniform in [0, 1): the descent
-    of :meth:`SumTreeSampler.draw`, member by member, a level at a time for all B draws: each
+    of :meth:`SumTreeSampler.draw` (``leaves`` a power of two, as both trees are built), member
+    by member, a level at a time for all B draws: each
     draw takes the steps it would take alone, but the B reads of a level are independent, so
     they overlap, and the step left or right is a select, not a branch the processor mispredicts
     half the time."""
@@ -403,7 +404,8 @@ class ReplayStack:
     transitions and drawing from the same generator (``tests/test_replay.py`` checks it): the
     same sums, the same draws, the same weights. Members add transitions in lockstep (the same
     number each time), so the write position and size are shared. Each member's uniform draws
-    come from its own generator (a call per member: what keeps a member's draws its own).
+    come from its own generator (what keeps a member's draws its own), drawn in the compiled
+    kernels (:func:`draws_kernel`).
     """
 
     def __init__(

@@ -104,10 +104,20 @@ class World(Protocol):
 
 
 def integrate_velocity(velocities: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
-    """``v' = (1 - DAMPING) v + a DT``, the velocity half of the dynamics."""
+    """``v' = (1 - DAMPING) v + a DT``, the velocity half of the dynamics, in float64: velocities
+    and accelerations (B, n, 2) (:func:`checked_accelerations`)."""
     out = np.empty((velocities.shape[0] * velocities.shape[1], 2))
-    _integrate_kernel(velocities, accelerations, 1.0 - DAMPING, DT, out)
+    _integrate_kernel(velocities, checked_accelerations(velocities, accelerations), 1.0 - DAMPING, DT, out)
     return out.reshape(velocities.shape)
+
+
+def checked_accelerations(velocities: np.ndarray, accelerations: np.ndarray) -> np.ndarray:
+    """``accelerations`` as float64 of the velocities' shape (B, n, 2), or a ValueError: the
+    compiled integration reads them element by element and would not broadcast them."""
+    arr = np.asarray(accelerations, dtype=np.float64)
+    if arr.shape != velocities.shape:
+        raise ValueError(f"accelerations of shape {arr.shape}: expected {velocities.shape}, one per disk")
+    return arr
 
 
 @numba.njit(cache=True)
@@ -453,6 +463,7 @@ class PymunkWorld:
         the buffer it reads), and the positions too if we moved disks (a reset, or putting them
         back at a wall) since it last stepped."""
         keep = 1.0 - DAMPING
+        accelerations = checked_accelerations(self.velocities, accelerations)
         if self._moved:
             flat = self._state
             flat[:-1, :2] = self.positions.reshape(-1, 2) + self._offsets_per_body

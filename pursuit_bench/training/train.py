@@ -297,9 +297,12 @@ def _as_arrays(value: Any) -> Any:
 def _stacked(arrays: list[np.ndarray]) -> np.ndarray:
     """``np.stack(arrays)`` of arrays of one shape and type (each member's rows of the same
     kind); a view of the one array when there is one (a run alone)."""
+    first = arrays[0]
     if len(arrays) == 1:
-        return arrays[0][None]
-    stacked = np.empty((len(arrays), *arrays[0].shape), dtype=arrays[0].dtype)
+        return first[None]
+    if any(a.shape != first.shape or a.dtype != first.dtype for a in arrays):
+        raise ValueError(f"rows to stack: expected one shape and type, got {[(a.shape, a.dtype.name) for a in arrays]}")
+    stacked = np.empty((len(arrays), *first.shape), dtype=first.dtype)
     for k, array in enumerate(arrays):
         stacked[k] = array
     return stacked
