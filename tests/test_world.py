@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pursuit_bench.env.task import ACCEL_CHASE, ACCEL_PREY, ACCEL_STALK
-from pursuit_bench.env.world import DAMPING, DT, RADIUS, make_world
+from pursuit_bench.env.world import DAMPING, DT, RADIUS, checked_accelerations, make_world
 
 BACKENDS = ["pymunk", "numpy"]
 
@@ -129,6 +129,7 @@ def test_accelerations_of_another_shape_are_refused_not_broadcast(backend: str) 
     world.reset(np.arange(3), np.zeros((3, 2, 2)))
     with pytest.raises(ValueError, match=r"accelerations of shape \(1, 2, 2\): expected \(3, 2, 2\)"):
         world.step(np.ones((1, 2, 2)))
-    accelerations = np.random.default_rng(0).normal(size=(3, 2, 2))
-    world.step(accelerations.astype(np.float32))
-    np.testing.assert_array_equal(world.velocities, accelerations.astype(np.float32).astype(np.float64) * DT)
+    accelerations = np.random.default_rng(0).normal(size=(3, 2, 2)).astype(np.float32)
+    assert checked_accelerations(world.velocities, accelerations).dtype == np.float64
+    world.step(accelerations)
+    np.testing.assert_array_equal(world.velocities, accelerations.astype(np.float64) * DT)
