@@ -112,7 +112,7 @@ class HierarchicalPredator(LearningAgent):
         self.avoidance = avoidance
 
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
-        actions = np.empty((*np.shape(choices), 2), dtype=np.int64)  # np.stack's result, for less
+        actions = np.empty((*np.shape(choices), 2), dtype=np.int64)  # (mode, direction) pairs
         actions[..., 0] = choices
         actions[..., 1] = navigate(obs, choices, avoidance=self.avoidance)
         return actions

@@ -201,13 +201,31 @@ def leave_obstacles(
     return touching, moved
 
 
-def _prey_overlap(positions: np.ndarray) -> np.ndarray:
-    delta = positions[:, :-1] - positions[:, -1:]
-    return (delta * delta).sum(axis=-1) < _CAPTURE_REACH_SQUARED
-
-
 #: A predator overlaps the prey when their centres are closer than two radii: that distance squared.
 _CAPTURE_REACH_SQUARED = (2 * RADIUS) ** 2
+
+
+@numba.njit(cache=True)
+def _prey_overlap_row(positions, b, reach_squared, out):
+    """``out[b, i]``: predator i of arena b overlaps the prey (``dx² + dy² < reach_squared``)."""
+    n = positions.shape[1]
+    for i in range(n - 1):
+        dx = positions[b, i, 0] - positions[b, n - 1, 0]
+        dy = positions[b, i, 1] - positions[b, n - 1, 1]
+        out[b, i] = dx * dx + dy * dy < reach_squared
+
+
+@numba.njit(cache=True)
+def _prey_overlap_kernel(positions, reach_squared):
+    out = np.empty((positions.shape[0], positions.shape[1] - 1), dtype=np.bool_)
+    for b in range(positions.shape[0]):
+        _prey_overlap_row(positions, b, reach_squared, out)
+    return out
+
+
+def _prey_overlap(positions: np.ndarray) -> np.ndarray:
+    """(B, n - 1) bool: which predators overlap their arena's prey."""
+    return _prey_overlap_kernel(positions, _CAPTURE_REACH_SQUARED)
 
 
 @numba.njit(cache=True)
@@ -238,10 +256,7 @@ def _settle_kernel(state, offsets, relative, obstacles, limit, tolerance, contai
     for b in range(arenas):
         if moved[b] or pushed[b]:
             any_moved = True
-            for i in range(n - 1):  # as _prey_overlap
-                dx = positions[b, i, 0] - positions[b, n - 1, 0]
-                dy = positions[b, i, 1] - positions[b, n - 1, 1]
-                prey[b, i] = dx * dx + dy * dy < reach_squared
+            _prey_overlap_row(positions, b, reach_squared, prey)
     return positions, velocities, wall, prey, obstacle, any_moved
 
 
