@@ -7,6 +7,7 @@ from pursuit_bench.env import task
 from pursuit_bench.env.world import DAMPING, DT, make_world
 from pursuit_bench.rules.navigation import (
     APPROACH_DIRECTIONS,
+    _python_mod,
     constant_bearing_angle,
     parallel_navigation,
     pure_pursuit,
@@ -116,3 +117,16 @@ def test_the_compiled_rule_is_the_rules_numpy_form() -> None:
         one_mode = parallel_navigation(observations[0, :5], 1)
         np.testing.assert_array_equal(one_mode, parallel_navigation(observations[0, :5], np.ones(5, dtype=int)))
         assert [parallel_navigation(observations[0, i], 1) for i in range(5)] == one_mode.tolist()
+
+
+def test_the_rules_remainder_is_pythons() -> None:
+    """``_python_mod`` (the rule's angle wrap, without ``fmod`` where the angles lie) gives the
+    bits of Python's ``%``, signed zeros, the range's ends, infinities and NaN included."""
+    period = 2 * np.pi
+    edges = [0.0, -0.0, period, -period, 2 * period, -2 * period, 3 * np.pi, np.pi, -np.pi, 1e-300, -1e-300]
+    edges += [np.nextafter(x, d) for x in (period, -period, 2 * period, 0.0) for d in (-np.inf, np.inf)]
+    edges += [1e20, -1e20, np.inf, -np.inf, np.nan]
+    values = np.concatenate([np.random.default_rng(0).uniform(-4 * np.pi, 6 * np.pi, 20_000), edges])
+    for x in values.tolist():
+        ours, pythons = _python_mod(x, period), x % period
+        assert np.float64(ours).tobytes() == np.float64(pythons).tobytes() or (np.isnan(ours) and np.isnan(pythons)), x

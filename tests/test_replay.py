@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 
 from pursuit_bench.agents.config import PAPER
-from pursuit_bench.agents.replay import CumulativeSumSampler, PrioritizedReplay, ReplayStack, SumTreeSampler, _tree_draw
+from pursuit_bench.agents.replay import (
+    CumulativeSumSampler,
+    PrioritizedReplay,
+    ReplayStack,
+    SumTreeSampler,
+    _tree_draw,
+    _tree_set,
+)
 
 SAMPLERS = ["flat", "tree"]
 
@@ -180,3 +187,25 @@ def test_a_replay_stack_samples_each_member_as_its_own_replay(prioritized: bool)
     kept = stack.take([3, 1])
     np.testing.assert_array_equal(kept.member_state(0)["priorities"], stack.member_state(3)["priorities"])
     np.testing.assert_array_equal(kept.obs[1], stack.obs[1])
+
+
+@pytest.mark.parametrize("k", [1, 7, 50, 64, 130])
+def test_storing_updates_each_tree_as_leaf_by_leaf_updates_do(k: int) -> None:
+    """``ReplayStack.add`` recomputes the touched parents a level at a time; the sums are those
+    of setting the same leaves one after another (``_tree_set``), through wrap-around and adds
+    of more transitions than the capacity."""
+    members, capacity = 2, 50
+    stack = ReplayStack(members, capacity, 3, alpha=0.6)
+    naive = stack.tree.copy()
+    data = np.random.default_rng(k)
+    for _ in range(4):
+        stack.max_priority[:] = data.uniform(0.5, 3.0, members)  # as a priority update leaves it
+        start = stack.position
+        obs = data.normal(size=(members, k, 3)).astype(np.float32)
+        stack.add(
+            obs, data.integers(0, 2, (members, k)), np.zeros((members, k), np.float32), obs, np.zeros((members, k))
+        )
+        slots = (start + np.arange(k)) % capacity
+        scaled = np.array([[p**0.6] * k for p in stack.max_priority.tolist()])  # the kernel's scalar power
+        _tree_set(naive, stack.leaves, np.repeat(slots[None], members, axis=0), scaled)
+        np.testing.assert_array_equal(stack.tree, naive)

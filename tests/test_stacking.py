@@ -123,3 +123,17 @@ def test_rows_of_different_shapes_or_types_are_not_stacked() -> None:
     for other in (rows[:1], rows.astype(np.float32)):
         with pytest.raises(ValueError, match="one shape and type"):
             _stacked([rows, other])
+
+
+def test_a_groups_rows_are_the_members_rows_stacked() -> None:
+    """``Group.rows``: one slice of a run's agents as a view, other members through ``_stacked``;
+    the values of ``np.stack`` of each member's rows either way."""
+    from pursuit_bench.training.train import Group
+
+    arrays = [np.arange(5 * 4 * 3.0).reshape(5, 4, 3), -np.arange(5 * 4 * 3.0).reshape(5, 4, 3)]
+    for runs, indices, sliced in (([0, 0, 0], [0, 1, 2], True), ([1], [3], True), ([0, 1], [2, 2], False)):
+        group = Group(None, [], indices, runs)  # type: ignore[arg-type]  # rows needs no learner
+        expected = np.stack([arrays[r][:, i] for r, i in zip(runs, indices, strict=True)])
+        np.testing.assert_array_equal(group.rows(arrays), expected)
+        assert (group.span is not None) == sliced == np.shares_memory(group.rows(arrays), arrays[runs[0]])
+    assert Group(None, [], [2, 1], [0, 0]).span is None  # type: ignore[arg-type]  # not in order: stacked

@@ -77,6 +77,8 @@ class FlatAdam:
         self.step_count = 0
         # numpy views of the buffers (never rebound) for the compiled step
         self._buffers = (self.flat.numpy(), self.grad.numpy(), self._m.numpy(), self._v.numpy())
+        beta1, beta2 = betas
+        self._constants = (np.float32(1 - beta1), np.float32(beta2), np.float32(1 - beta2))
 
     def zero_grad(self) -> None:
         self.grad.zero_()
@@ -94,9 +96,7 @@ class FlatAdam:
         f32 = np.float32
         return (
             *self._buffers,
-            f32(1 - beta1),
-            f32(beta2),
-            f32(1 - beta2),
+            *self._constants,
             f32(self.lr / (1 - beta1**step)),
             f32(math.sqrt(1 - beta2**step)),
             f32(self.eps),

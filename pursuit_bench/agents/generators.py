@@ -10,6 +10,7 @@ keeps that list for a learner's members and builds it again only when they chang
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Sequence
 from typing import Any
 
@@ -39,7 +40,7 @@ class CompiledGenerators:
 
     def of(self, rngs: Sequence[np.random.Generator]) -> Any:
         """The typed list of ``rngs``: the one built before if they are the same objects."""
-        if len(rngs) != len(self._of) or any(a is not b for a, b in zip(rngs, self._of, strict=True)):
+        if len(rngs) != len(self._of) or not all(map(operator.is_, rngs, self._of)):
             self._compiled = compiled_generators(rngs)
             self._of = list(rngs)
         return self._compiled

@@ -313,9 +313,10 @@ def _store(
 ):
     """Write k transitions per member (``new_…``, each (M, k, …)) into the slots from ``position``
     on (wrapping), each at its member's largest priority so far, and update the trees (each
-    touched parent recomputed from its children, as :func:`_tree_set` does)."""
+    touched parent recomputed from its children once they are final, as :func:`_tree_set` does)."""
     members, k = new_actions.shape
     capacity = actions.shape[1]
+    last = position + k - 1  # the slots position … last, modulo the capacity
     for m in range(members):
         scaled = max_priority[m] ** alpha
         for j in range(k):
@@ -326,7 +327,27 @@ def _store(
             rewards[m, slot] = new_rewards[m, j]
             terminated[m, slot] = new_terminated[m, j]
             priorities[m, slot] = max_priority[m]
-            _tree_set_one(tree, leaves, m, slot, scaled)
+            tree[m, leaves + slot] = scaled
+        if k >= capacity:
+            _tree_refresh(tree, leaves, m, 0, capacity - 1)
+        elif last < capacity:
+            _tree_refresh(tree, leaves, m, position, last)
+        else:  # wrapped: two runs of slots
+            _tree_refresh(tree, leaves, m, position, capacity - 1)
+            _tree_refresh(tree, leaves, m, 0, last - capacity)
+
+
+@numba.njit(cache=True)
+def _tree_refresh(tree, leaves, m, first, last):
+    """Member m's ancestors of the leaves of slots ``first … last`` recomputed from their
+    children, a level at a time (each once, after its children: the sums a leaf-by-leaf update
+    of those leaves ends with)."""
+    low, high = (leaves + first) // 2, (leaves + last) // 2
+    while low >= 1:
+        for node in range(low, high + 1):
+            tree[m, node] = tree[m, 2 * node] + tree[m, 2 * node + 1]
+        low //= 2
+        high //= 2
 
 
 @numba.njit(cache=True)

@@ -8,6 +8,7 @@ positions and velocities are ``(B, n_agents, 2)``; predator modes ``(B, n_predat
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numba
@@ -329,11 +330,19 @@ def outcome(config: TaskConfig, contacts: Contacts, modes: np.ndarray) -> Outcom
     return Outcome(rewards=rewards, terminated=terminated, captured=captured)
 
 
+@functools.cache
+def _pairs(n_agents: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.triu_indices(n_agents, 1)``: every pair of agents once (made once per agent count)."""
+    first, second = np.triu_indices(n_agents, 1)
+    first.flags.writeable = second.flags.writeable = False
+    return first, second
+
+
 def start_layouts(rng: np.random.Generator, n_agents: int, count: int) -> np.ndarray:
     """Start layouts (k, n_agents, 2), uniform in ``[-0.5, 0.5]²`` (paper 3.1): ``count``
     layouts drawn at once from ``rng``, those in which two disks overlap dropped (dropping is our
     addition; the paper does not say), drawn again if none is left."""
-    first, second = np.triu_indices(n_agents, 1)
+    first, second = _pairs(n_agents)
     while True:
         layouts = rng.uniform(-START_HALF_SIZE, START_HALF_SIZE, size=(count, n_agents, 2))
         gaps = layouts[:, first] - layouts[:, second]

@@ -3,7 +3,8 @@
 Autoreset is *same-step*: when an arena's episode ends on a step, that step's rewards,
 ``terminated`` and ``truncated`` belong to the ended episode, the returned observation is
 already the first of the arena's next episode, and the ended episode's last observation is in
-``info["final_obs"]`` (valid where ``info["done"]``). A learner bootstraps from it, unless
+``info["final_obs"]`` (every arena's observation before the autoreset: where not
+``info["done"]``, the returned one). A learner bootstraps from it, unless
 the arena terminated. Each arena draws its start states from its own generator, spawned from
 the seed given to ``reset``.
 """
@@ -62,7 +63,7 @@ class VectorPursuitEnv:
     (the prey's mode is ignored), or with ``continuous=True`` floats of that shape (each agent's
     acceleration in its line-of-sight frame), and returns ``obs`` (B, n_agents, 6n-2) float32, ``rewards``
     (B, n_agents) float64, ``terminated`` and ``truncated`` (B, n_agents) bool, and ``info``
-    with ``done`` (B,), ``final_obs`` (B, n_agents, 6n-2), ``positions`` (B, n_agents, 2)
+    with ``done`` (B,), ``final_obs`` (B, n_agents, 6n-2) (before any autoreset), ``positions`` (B, n_agents, 2)
     float64 at the end of the step (before any autoreset), ``captured`` (B,), ``touching_prey``
     (B, n_predators), ``left_area`` (B, n_agents), ``touching_obstacle`` (B, n_agents),
     ``episode_return`` (B, n_agents) and ``episode_length`` (B,) of the episodes that ended.

@@ -73,18 +73,35 @@ def _parallel_navigation(obs, modes, dirs, approach, chase, accel_stalk, accel_c
         phi = np.arctan2(py, px)
         best_change, choice, best_distance = np.inf, 0, np.inf
         change = np.empty(len(approach))
-        distance = np.empty(len(approach))
+        lxs = np.empty(len(approach))
+        lys = np.empty(len(approach))
         for k in range(len(approach)):
             lx = nx - ((1.0 - damping) * vx + accel * dt * dirs[k, 0]) * dt
             ly = ny - ((1.0 - damping) * vy + accel * dt * dirs[k, 1]) * dt
-            change[k] = abs((np.arctan2(ly, lx) - phi + np.pi) % (2 * np.pi) - np.pi)
-            distance[k] = np.hypot(lx, ly)
+            change[k] = abs(_python_mod(np.arctan2(ly, lx) - phi + np.pi, 2 * np.pi) - np.pi)
+            lxs[k], lys[k] = lx, ly
             best_change = min(best_change, change[k])
         for k in range(len(approach)):  # ties (within TIE_TOLERANCE) to the smaller distance, then the first
-            if change[k] <= best_change + TIE_TOLERANCE and distance[k] < best_distance:
-                best_distance, choice = distance[k], k
+            if change[k] <= best_change + TIE_TOLERANCE:
+                distance = np.hypot(lxs[k], lys[k])  # only the ties' distances are needed
+                if distance < best_distance:
+                    best_distance, choice = distance, k
         out[r] = approach[choice]
     return out
+
+
+@numba.njit(cache=True)
+def _python_mod(x, period):
+    """Python's ``x % period`` for ``period > 0``, the same bits, without a call to ``fmod`` for
+    ``x`` in ``(-period, 2 period)`` (where the rule's angles lie): there ``fmod`` is ``x`` or
+    the exact ``x - period``, and Python adds ``period`` to a negative remainder; elsewhere ``%``."""
+    if 0.0 < x < period:
+        return x
+    if period <= x < 2.0 * period:
+        return x - period
+    if -period < x < 0.0:
+        return x + period
+    return x % period
 
 
 def pure_pursuit(observations: np.ndarray) -> np.ndarray:

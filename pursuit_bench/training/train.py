@@ -19,7 +19,7 @@ The CLI parses options into a :class:`TrainConfig` and calls :class:`Trainer`.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -53,6 +53,24 @@ class Group:
     agents: list[LearningAgent]
     indices: list[int]
     runs: list[int]
+    span: tuple[int, slice] | None = field(init=False)
+    """``(run, agents)`` when the members are consecutive agents of one run, in order (every
+    member of a run alone, or its predators): their rows are one slice."""
+
+    def __post_init__(self) -> None:
+        first = self.indices[0]
+        one_run = all(r == self.runs[0] for r in self.runs)
+        consecutive = self.indices == list(range(first, first + len(self.indices)))
+        self.span = (self.runs[0], slice(first, first + len(self.indices))) if one_run and consecutive else None
+
+    def rows(self, arrays: Sequence[np.ndarray] | Mapping[int, np.ndarray]) -> np.ndarray:
+        """Each member's rows of its run's array (B, n_agents, …), ``arrays[r]`` for run r,
+        stacked as (M, B, …): the values of ``np.stack`` of ``arrays[runs[m]][:, indices[m]]``,
+        as a view of ``arrays[r]`` when the members are one slice of run r's agents."""
+        if self.span is not None:
+            run, agents = self.span
+            return arrays[run][:, agents].swapaxes(0, 1)
+        return _stacked([arrays[r][:, i] for r, i in zip(self.runs, self.indices, strict=True)])
 
 
 @dataclass
@@ -177,33 +195,37 @@ class Run:
         self.env_steps += 1
         if self.traces is not None:
             self.traces.add_step(actions, rewards, info, self.q_values, self.values)
-        for arena in np.flatnonzero(info["done"]):
-            self._finish_episode(int(arena), info, bool(truncated[arena, 0]))
+        ended = np.flatnonzero(info["done"])
+        if len(ended):
+            self._finish_episodes(ended, info, truncated[ended, 0])
         self.obs = next_obs
 
-    def _finish_episode(self, arena: int, info: dict[str, Any], truncated: bool) -> None:
-        length = int(info["episode_length"][arena])
-        chase = self.chase_steps[arena] / length
-        self.chase_steps[arena] = 0.0
-        trace = None
-        if self.traces is not None:
-            world = self.env.core.world
-            trace = self.traces.finish(arena, truncated, world.positions[arena], world.obstacles[arena])
+    def _finish_episodes(self, arenas: np.ndarray, info: dict[str, Any], truncated: np.ndarray) -> None:
+        """Report the episodes that ended in ``arenas`` this step, in arena order."""
+        lengths = info["episode_length"][arenas]
+        chase = (self.chase_steps[arenas] / lengths[:, None]).tolist()
+        self.chase_steps[arenas] = 0.0
         extra: dict[str, float] = {f"loss/{a}": loss for a, loss in self.last_losses.items()}
         if self.learner is not None:
             extra.update({"epsilon": self.learner.epsilon, "beta": self.learner.beta})
-        record = EpisodeRecord(
-            episode=0,  # numbered when reported
-            length=length,
-            captured=bool(info["captured"][arena]),
-            returns={a: float(r) for a, r in zip(self.names, info["episode_return"][arena], strict=True)},
-            chase_fraction={a: float(c) for a, c in zip(self.names[:-1], chase, strict=True)},
-            extra=extra,
-        )
-        if self.finished:  # beyond the budget: not counted, kept for a resume that extends it
-            self.pending.append(record)
-            return
-        self._report(record, trace)
+        returns, captured = info["episode_return"][arenas].tolist(), info["captured"][arenas].tolist()
+        for k, (arena, length) in enumerate(zip(arenas.tolist(), lengths.tolist(), strict=True)):
+            trace = None
+            if self.traces is not None:
+                world = self.env.core.world
+                trace = self.traces.finish(arena, bool(truncated[k]), world.positions[arena], world.obstacles[arena])
+            record = EpisodeRecord(
+                episode=0,  # numbered when reported
+                length=length,
+                captured=captured[k],
+                returns=dict(zip(self.names, returns[k], strict=True)),
+                chase_fraction=dict(zip(self.names[:-1], chase[k], strict=True)),
+                extra=dict(extra),
+            )
+            if self.finished:  # beyond the budget: not counted, kept for a resume that extends it
+                self.pending.append(record)
+            else:
+                self._report(record, trace)
 
     def _report(self, record: EpisodeRecord, trace: EpisodeTrace | None) -> None:
         """Count a finished episode and tell the recorder and ``on_episode`` of it."""
@@ -402,8 +424,9 @@ class Trainer:
             r: np.zeros((self.runs[r].config.num_envs, len(self.runs[r].names), 2), dtype=np.int64) for r in active
         }
         decided = []
+        observations = [run.obs for run in self.runs]
         for group in self.groups:  # one forward pass per group, all its runs at once
-            obs = _stacked([self.runs[r].obs[:, i] for r, i in zip(group.runs, group.indices, strict=True)])
+            obs = group.rows(observations)
             chosen, q, v = group.learner.act_members(obs, explore=True)
             decided.append((obs, chosen))
             env_actions = members_to_env(group.agents, chosen, obs)
@@ -419,19 +442,12 @@ class Trainer:
                     put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
 
         steps = {r: self.runs[r].env.step(actions[r]) for r in active}
-        # what each arena's agents saw next: the ended episodes' last observations where they ended
-        real_next = {}
-        for r, (next_obs, _, _, _, info) in steps.items():
-            done = info["done"]
-            real_next[r] = np.where(done[:, None, None], info["final_obs"], next_obs) if done.any() else next_obs
+        # what each arena's agents saw next: the ended episodes' last observations, not the new ones
+        real_next = {r: info["final_obs"] for r, (_, _, _, _, info) in steps.items()}
+        rewards_of = {r: step[1] for r, step in steps.items()}
+        terminated_of = {r: step[2] for r, step in steps.items()}
         for group, (obs, chosen) in zip(self.groups, decided, strict=True):
-            rewards_m, next_m, terminated_m = [], [], []
-            for r, i in zip(group.runs, group.indices, strict=True):
-                _, rewards, terminated, _, _ = steps[r]
-                rewards_m.append(rewards[:, i])
-                next_m.append(real_next[r][:, i])
-                terminated_m.append(terminated[:, i])
-            group.learner.store(obs, chosen, _stacked(rewards_m), _stacked(next_m), _stacked(terminated_m))
+            group.learner.store(obs, chosen, group.rows(rewards_of), group.rows(real_next), group.rows(terminated_of))
             losses = group.learner.train()
             if losses is not None:
                 for agent, r, loss in zip(group.agents, group.runs, losses, strict=True):
