@@ -96,27 +96,67 @@ def test_constant_bearing_formula() -> None:
         constant_bearing_angle(1.0, 0.0, 0.3)
 
 
-def test_the_compiled_rule_is_the_rules_numpy_form() -> None:
-    """:func:`parallel_navigation` (compiled, row by row) against the rule written out in numpy
-    over random observations, float32 and float64, one mode for all or one per row."""
-    rng = np.random.default_rng(0)
-    obs = rng.normal(size=(4, 500, 16))
-    modes = rng.integers(0, 2, size=(4, 500))
+def _rule_in_numpy(observations: np.ndarray, modes: np.ndarray) -> np.ndarray:
+    """The rule written out in numpy: every direction's change of φ and distance."""
     accel = np.where(modes == 1, task.ACCEL_CHASE, task.ACCEL_STALK)[..., None, None]
     angles = -task.DIRECTION_STEP * APPROACH_DIRECTIONS
     dirs = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
-    for observations in (obs, obs.astype(np.float32)):
-        o = observations.astype(np.float64)
-        prey_rel = o[..., None, 6:8]
-        line = prey_rel + o[..., None, 8:10] * DT - ((1.0 - DAMPING) * o[..., None, 2:4] + accel * DT * dirs) * DT
-        phi = np.arctan2(prey_rel[..., 1], prey_rel[..., 0])
+    o = observations.astype(np.float64)
+    prey_rel = o[..., None, 6:8]
+    line = prey_rel + o[..., None, 8:10] * DT - ((1.0 - DAMPING) * o[..., None, 2:4] + accel * DT * dirs) * DT
+    phi = np.arctan2(prey_rel[..., 1], prey_rel[..., 0])
+    with np.errstate(invalid="ignore"):
         change = np.abs((np.arctan2(line[..., 1], line[..., 0]) - phi + np.pi) % (2 * np.pi) - np.pi)
-        tied = change <= change.min(axis=-1, keepdims=True) + 1e-12
-        expected = APPROACH_DIRECTIONS[np.argmin(np.where(tied, np.hypot(line[..., 0], line[..., 1]), np.inf), -1)]
-        np.testing.assert_array_equal(parallel_navigation(observations, modes), expected)
+        tied = change <= np.min(np.where(np.isnan(change), np.inf, change), axis=-1, keepdims=True) + 1e-12
+        distance = np.where(tied, np.hypot(line[..., 0], line[..., 1]), np.inf)
+    first_smallest = np.array(
+        [next((k for k, d in enumerate(row) if d == min(row)), 0) for row in distance.reshape(-1, 7)]
+    )
+    return APPROACH_DIRECTIONS[first_smallest].reshape(observations.shape[:-1])
+
+
+def test_the_compiled_rule_is_the_rules_numpy_form() -> None:
+    """:func:`parallel_navigation` (compiled, row by row, angles only for the candidates) against
+    the rule written out in numpy over random observations, float32 and float64, one mode for all
+    or one per row."""
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(4, 500, 16))
+    modes = rng.integers(0, 2, size=(4, 500))
+    for observations in (obs, obs.astype(np.float32)):
+        np.testing.assert_array_equal(parallel_navigation(observations, modes), _rule_in_numpy(observations, modes))
         one_mode = parallel_navigation(observations[0, :5], 1)
         np.testing.assert_array_equal(one_mode, parallel_navigation(observations[0, :5], np.ones(5, dtype=int)))
         assert [parallel_navigation(observations[0, i], 1) for i in range(5)] == one_mode.tolist()
+
+
+def test_the_rule_keeps_every_direction_it_needs_on_hard_cases() -> None:
+    """Against the numpy form where choosing the candidates could go wrong: exact and near ties
+    (symmetric layouts, the prey dead ahead or behind), vectors of zero length, tiny and huge
+    scales, infinities and NaN."""
+    rng = np.random.default_rng(1)
+    rows = []
+    for scale in (1e-300, 1e-200, 1e-8, 1.0, 1e8, 1e200, 1e300):
+        rows.append(rng.normal(size=(200, 16)) * scale)
+    symmetric = np.zeros((200, 16))
+    symmetric[:, 6] = rng.choice([-1.0, 1.0], 200) * rng.uniform(1e-6, 2, 200)  # the prey on the line of sight
+    symmetric[:100, 2] = rng.uniform(-1, 1, 100)  # own velocity along it: still symmetric
+    rows += [symmetric, symmetric * 1e-7]
+    near = symmetric.copy()
+    near[:, 7] = rng.choice([-1, 1], 200) * 10.0 ** rng.uniform(-16, -8, 200)  # just off the line
+    rows.append(near)
+    odd = rng.normal(size=(60, 16))
+    odd[:10] = 0.0
+    odd[10:20, 6:8] = 0.0
+    odd[20:30, 8] = np.nan
+    odd[30:40, 6] = np.inf
+    odd[40:50, 2] = -np.inf
+    odd[50:60, 6:10] = odd[50:60, 6:10] * 1e160
+    rows.append(odd)
+    obs = np.concatenate(rows)
+    for mode in (0, 1):
+        modes = np.full(len(obs), mode)
+        with np.errstate(all="ignore"):
+            np.testing.assert_array_equal(parallel_navigation(obs, modes), _rule_in_numpy(obs, modes))
 
 
 def test_the_rules_remainder_is_pythons() -> None:

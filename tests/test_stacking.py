@@ -137,3 +137,26 @@ def test_a_groups_rows_are_the_members_rows_stacked() -> None:
         np.testing.assert_array_equal(group.rows(arrays), expected)
         assert (group.span is not None) == sliced == np.shares_memory(group.rows(arrays), arrays[runs[0]])
     assert Group(None, [], [2, 1], [0, 0]).span is None  # type: ignore[arg-type]  # not in order: stacked
+
+
+def test_a_groups_actions_go_to_each_members_place() -> None:
+    """``Group.put``: members' (mode, direction) pairs or directions land at their run and agent,
+    in one assignment for a slice of a run's agents, one by one otherwise."""
+    from pursuit_bench.training.train import Group
+
+    rng = np.random.default_rng(0)
+    for runs, indices in (([0, 0, 0], [0, 1, 2]), ([1], [3]), ([0, 1], [2, 2])):
+        group = Group(None, [], indices, runs)  # type: ignore[arg-type]  # put needs no learner
+        for pairs in (True, False):
+            shape = (len(runs), 5, 2) if pairs else (len(runs), 5)
+            env_actions = rng.integers(0, 12, shape)
+            actions = {0: np.full((5, 4, 2), -1), 1: np.full((5, 4, 2), -1)}
+            expected = {r: a.copy() for r, a in actions.items()}
+            for m, (r, i) in enumerate(zip(runs, indices, strict=True)):
+                expected[r][:, i, slice(None) if pairs else 1] = env_actions[m]
+            group.put(actions, env_actions)
+            for r in actions:
+                np.testing.assert_array_equal(actions[r], expected[r])
+            group.put(actions, list(env_actions))  # a list of members' actions: one by one, the same
+            for r in actions:
+                np.testing.assert_array_equal(actions[r], expected[r])

@@ -161,14 +161,15 @@ class ScriptedAgent:
         return self.act_batch(np.asarray(observation)[None])[0]
 
 
-def members_to_env(agents: list[LearningAgent], choices: np.ndarray, obs: np.ndarray) -> list[np.ndarray]:
-    """Each member's env actions for the choices (M, B) of one learner's members ``agents``
-    given their observations (M, B, n_obs): one call of the rule for all of them when they are
-    hierarchical predators that steer alike (the rule is elementwise: the same numbers)."""
+def members_to_env(agents: list[LearningAgent], choices: np.ndarray, obs: np.ndarray) -> list[np.ndarray] | np.ndarray:
+    """Each member's env actions (member m's at ``[m]``) for the choices (M, B) of one learner's
+    members ``agents`` given their observations (M, B, n_obs): one call of the rule for all of
+    them, one array (M, B, 2), when they are hierarchical predators that steer alike (the rule
+    is elementwise: the same numbers)."""
     first = agents[0]
     if isinstance(first, HierarchicalPredator) and all(
         type(a) is type(first) and isinstance(a, HierarchicalPredator) and a.avoidance == first.avoidance
         for a in agents
     ):
-        return list(first.to_env(choices, obs))
+        return first.to_env(choices, obs)
     return [agent.to_env(choices[m], obs[m]) for m, agent in enumerate(agents)]

@@ -62,32 +62,72 @@ def parallel_navigation(observations: np.ndarray, modes: np.ndarray | int) -> np
 def _parallel_navigation(obs, modes, dirs, approach, chase, accel_stalk, accel_chase, damping, dt):
     """:func:`parallel_navigation` row by row (compiled: the rule runs for every predator of every
     arena at every step), in float64 whatever the observations' type. The physics comes in as
-    arguments: numba's cache would keep constants of other modules as they were compiled."""
+    arguments: numba's cache would keep constants of other modules as they were compiled.
+
+    The angles (``arctan2``) are computed only for the directions :func:`_candidates` keeps, and
+    the distances only for the ties: the same choice, from the same numbers, as computing them
+    for every direction."""
     out = np.empty(obs.shape[0], dtype=np.int64)
+    n = len(approach)
+    lxs, lys, change, pseudo = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    considered = np.empty(n, dtype=np.bool_)
     for r in range(obs.shape[0]):
         accel = accel_chase if modes[r] == chase else accel_stalk
         px, py = np.float64(obs[r, _PREY_REL.start]), np.float64(obs[r, _PREY_REL.start + 1])
         nx = px + np.float64(obs[r, _PREY_VEL.start]) * dt
         ny = py + np.float64(obs[r, _PREY_VEL.start + 1]) * dt
         vx, vy = np.float64(obs[r, _OWN_VEL.start]), np.float64(obs[r, _OWN_VEL.start + 1])
+        for k in range(n):  # the line of sight after the step in direction k
+            lxs[k] = nx - ((1.0 - damping) * vx + accel * dt * dirs[k, 0]) * dt
+            lys[k] = ny - ((1.0 - damping) * vy + accel * dt * dirs[k, 1]) * dt
+        _candidates(px, py, lxs, lys, pseudo, considered)
         phi = np.arctan2(py, px)
         best_change, choice, best_distance = np.inf, 0, np.inf
-        change = np.empty(len(approach))
-        lxs = np.empty(len(approach))
-        lys = np.empty(len(approach))
-        for k in range(len(approach)):
-            lx = nx - ((1.0 - damping) * vx + accel * dt * dirs[k, 0]) * dt
-            ly = ny - ((1.0 - damping) * vy + accel * dt * dirs[k, 1]) * dt
-            change[k] = abs(_python_mod(np.arctan2(ly, lx) - phi + np.pi, 2 * np.pi) - np.pi)
-            lxs[k], lys[k] = lx, ly
-            best_change = min(best_change, change[k])
-        for k in range(len(approach)):  # ties (within TIE_TOLERANCE) to the smaller distance, then the first
-            if change[k] <= best_change + TIE_TOLERANCE:
-                distance = np.hypot(lxs[k], lys[k])  # only the ties' distances are needed
+        for k in range(n):
+            if considered[k]:
+                change[k] = abs(_python_mod(np.arctan2(lys[k], lxs[k]) - phi + np.pi, 2 * np.pi) - np.pi)
+                best_change = min(best_change, change[k])
+        for k in range(n):  # ties (within TIE_TOLERANCE) to the smaller distance, then the first
+            if considered[k] and change[k] <= best_change + TIE_TOLERANCE:
+                distance = np.hypot(lxs[k], lys[k])
                 if distance < best_distance:
                     best_distance, choice = distance, k
         out[r] = approach[choice]
     return out
+
+
+#: :func:`_candidates` keeps the directions whose pseudo-angle is within this of the smallest.
+CANDIDATE_MARGIN = 1e-9
+#: ... when every product it forms lies between these (else it keeps every direction).
+_CANDIDATE_RANGE = (1e-250, 1e250)
+
+
+@numba.njit(cache=True)
+def _candidates(px, py, lxs, lys, pseudo, considered):
+    """Mark in ``considered`` the directions k that can be the rule's choice: those whose
+    predicted line of sight ``(lxs[k], lys[k])`` is within :data:`CANDIDATE_MARGIN` of the
+    smallest *pseudo-angle* to the current one ``(px, py)``; ``pseudo`` is scratch space.
+
+    The pseudo-angle ``s / (c + s)`` (``c ≥ 0``), ``1 - c / (s - c)`` (``c < 0``), with ``c`` the
+    dot and ``s`` the absolute cross product, grows with the angle θ between the two at a rate
+    between 1/2 and 1 and is computed to a few 1e-16 (no cancellation: ``c + s`` and ``s - c``
+    are at least ``|l| |p|``). The rule's change of φ is θ to a few 1e-16 too. So a direction
+    whose change is within :data:`TIE_TOLERANCE` of the smallest has a pseudo-angle within about
+    1e-12 of the smallest, far inside the margin: every direction the rule's choice depends on
+    is kept (usually the only one kept is the choice). Where the products are zero, tiny, huge or
+    not numbers, every direction is kept (the rule as written out)."""
+    lowest = np.inf
+    for k in range(len(lxs)):
+        c = lxs[k] * px + lys[k] * py
+        s = abs(lxs[k] * py - lys[k] * px)
+        scale = c + s if c >= 0 else s - c
+        if not (_CANDIDATE_RANGE[0] < scale < _CANDIDATE_RANGE[1]):
+            considered[:] = True
+            return
+        pseudo[k] = s / scale if c >= 0 else 1.0 - c / scale
+        lowest = min(lowest, pseudo[k])
+    for k in range(len(lxs)):
+        considered[k] = pseudo[k] <= lowest + CANDIDATE_MARGIN
 
 
 @numba.njit(cache=True)

@@ -72,6 +72,21 @@ class Group:
             return arrays[run][:, agents].swapaxes(0, 1)
         return _stacked([arrays[r][:, i] for r, i in zip(self.runs, self.indices, strict=True)])
 
+    def put(self, actions: Mapping[int, np.ndarray], env_actions: Sequence[np.ndarray] | np.ndarray) -> None:
+        """Write member m's env actions ``env_actions[m]``, (B, 2) ``(mode, direction)`` pairs or
+        (B,) directions, into its run's actions ``actions[r]`` (B, n_agents, 2): one assignment when
+        the members are a slice of one run's agents and their actions one array (M, B, …)."""
+        if self.span is not None and isinstance(env_actions, np.ndarray):
+            run, agents = self.span
+            if env_actions.ndim == 3:
+                actions[run][:, agents] = env_actions.swapaxes(0, 1)
+                return
+            if env_actions.ndim == 2:
+                actions[run][:, agents, 1] = env_actions.T
+                return
+        for m, (r, i) in enumerate(zip(self.runs, self.indices, strict=True)):
+            put_actions(actions[r], i, env_actions[m])
+
 
 @dataclass
 class EpisodeRecord:
@@ -372,6 +387,11 @@ class Trainer:
         for group in self.groups:
             for r in group.runs:
                 self.runs[r].learner = self.runs[r].learner or group.learner
+        # each run's scripted agents, by their place among its agents
+        self._scripted = [
+            [(i, agent) for i, agent in enumerate(run.agents.values()) if isinstance(agent, ScriptedAgent)]
+            for run in self.runs
+        ]
 
     @property
     def config(self) -> TrainConfig:
@@ -425,21 +445,20 @@ class Trainer:
         }
         decided = []
         observations = [run.obs for run in self.runs]
+        recording = any(self.runs[r].traces is not None for r in active)
         for group in self.groups:  # one forward pass per group, all its runs at once
             obs = group.rows(observations)
             chosen, q, v = group.learner.act_members(obs, explore=True)
             decided.append((obs, chosen))
-            env_actions = members_to_env(group.agents, chosen, obs)
-            for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):
-                put_actions(actions[r], i, env_actions[m])
-                if self.runs[r].traces is not None and isinstance(agent, HierarchicalPredator):
-                    self.runs[r].q_values[:, i], self.runs[r].values[:, i] = agent.mode_q(q[m]), v[m]
+            group.put(actions, members_to_env(group.agents, chosen, obs))
+            if recording:  # what the recordings draw: each hierarchical predator's Q and V
+                for m, (agent, r, i) in enumerate(zip(group.agents, group.runs, group.indices, strict=True)):
+                    if self.runs[r].traces is not None and isinstance(agent, HierarchicalPredator):
+                        self.runs[r].q_values[:, i], self.runs[r].values[:, i] = agent.mode_q(q[m]), v[m]
         for r in active:
             run = self.runs[r]
-            for i, name in enumerate(run.names):
-                scripted = run.agents[name]
-                if isinstance(scripted, ScriptedAgent):
-                    put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
+            for i, scripted in self._scripted[r]:
+                put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
 
         steps = {r: self.runs[r].env.step(actions[r]) for r in active}
         # what each arena's agents saw next: the ended episodes' last observations, not the new ones
