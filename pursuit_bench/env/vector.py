@@ -187,7 +187,7 @@ class VectorPursuitEnv:
         ended = done.nonzero()[0]
         if len(ended):
             obs = obs.copy()  # the ended episodes' last observations stay in the info
-            obs[ended] = self.core.reset(ended, [self._rngs[i] for i in ended])
+            obs[ended] = self.core.reset(ended, [self._rngs[i] for i in ended.tolist()])
             self._returns[ended] = 0.0
         terminated = result.terminated.repeat(self.n_agents).reshape(self.num_envs, self.n_agents)
         truncated = result.truncated.repeat(self.n_agents).reshape(self.num_envs, self.n_agents)

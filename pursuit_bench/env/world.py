@@ -314,7 +314,10 @@ class NumpyWorld:
         return Contacts(wall=wall, prey=_prey_overlap(p), obstacle=obstacle)
 
 
-_WALL, _PREDATOR, _PREY, _OBSTACLE = 1, 2, 3, 4
+_WALL, _PREY, _OBSTACLE = 1, 3, 4
+#: Predator ``agent`` of arena ``arena`` has the collision type ``_FIRST_PREDATOR + arena ·
+#: n_predators + agent``: a capture's handler is that predator's own and knows where it is.
+_FIRST_PREDATOR = 16
 
 
 class PymunkWorld:
@@ -358,7 +361,6 @@ class PymunkWorld:
             [[(i % columns) * spacing, (i // columns) * spacing] for i in range(num_arenas)],
             dtype=np.float64,
         )
-        self._index: dict[pymunk.Shape, tuple[int, int]] = {}
         predators = pymunk.ShapeFilter(group=1)
         for arena, (ox, oy) in enumerate(self.offsets):
             self._add_walls(ox, oy, half_size)
@@ -368,12 +370,13 @@ class PymunkWorld:
                 disk = pymunk.Circle(body, RADIUS)
                 disk.friction = 0.0
                 disk.elasticity = 0.0
-                is_prey = agent == n_agents - 1
-                disk.collision_type = _PREY if is_prey else _PREDATOR
-                if not is_prey:
+                if agent == n_agents - 1:
+                    disk.collision_type = _PREY
+                else:
+                    disk.collision_type = _FIRST_PREDATOR + arena * (n_agents - 1) + agent
                     disk.filter = predators
+                    space.on_collision(disk.collision_type, _PREY, pre_solve=self._on_capture, data=(arena, agent))
                 space.add(body, disk)
-                self._index[disk] = (arena, agent)
         self.obstacles = np.zeros((num_arenas, obstacles, 3))
         if obstacles:
             # Contacts solved afresh each step: an arbiter kept from an earlier contact (pymunk's
@@ -390,7 +393,6 @@ class PymunkWorld:
                 space.add(shape)
             self._obstacle_shapes.append(shapes)
         space.use_spatial_hash(HASH_CELL, HASH_BUCKETS_PER_SHAPE * len(space.shapes))
-        space.on_collision(_PREDATOR, _PREY, pre_solve=self._on_capture)
 
         self._offsets_per_body = np.repeat(self.offsets, n_agents, axis=0)
         self._offset = bool(self.offsets.any())  # a single arena sits at the origin
@@ -421,9 +423,9 @@ class PymunkWorld:
             wall.elasticity = 0.0
             self.space.add(wall)
 
-    def _on_capture(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        arena, agent = self._index[arbiter.shapes[0]]
-        self._prey[arena, agent] = True
+    def _on_capture(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: tuple[int, int]) -> None:
+        """A predator touches its arena's prey: ``data`` is the predator's (arena, agent)."""
+        self._prey[data] = True
         arbiter.process_collision = False
 
     def _bodies_state(self) -> np.ndarray:

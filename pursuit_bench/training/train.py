@@ -210,7 +210,7 @@ class Run:
         self.env_steps += 1
         if self.traces is not None:
             self.traces.add_step(actions, rewards, info, self.q_values, self.values)
-        ended = np.flatnonzero(info["done"])
+        ended = info["done"].nonzero()[0]
         if len(ended):
             self._finish_episodes(ended, info, truncated[ended, 0])
         self.obs = next_obs
@@ -469,8 +469,8 @@ class Trainer:
             group.learner.store(obs, chosen, group.rows(rewards_of), group.rows(real_next), group.rows(terminated_of))
             losses = group.learner.train()
             if losses is not None:
-                for agent, r, loss in zip(group.agents, group.runs, losses, strict=True):
-                    self.runs[r].last_losses[agent.name] = float(loss)
+                for agent, r, loss in zip(group.agents, group.runs, losses.tolist(), strict=True):
+                    self.runs[r].last_losses[agent.name] = loss
 
         for r in active:
             next_obs, rewards, terminated, truncated, info = steps[r]
