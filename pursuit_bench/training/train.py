@@ -447,7 +447,7 @@ class Trainer:
         observations = [run.obs for run in self.runs]
         recording = any(self.runs[r].traces is not None for r in active)
         for group in self.groups:  # one forward pass per group, all its runs at once
-            obs = group.rows(observations)
+            obs = np.ascontiguousarray(group.rows(observations))  # one copy for the network, the rule and the replay
             chosen, q, v = group.learner.act_members(obs, explore=True)
             decided.append((obs, chosen))
             group.put(actions, members_to_env(group.agents, chosen, obs))
