@@ -88,6 +88,14 @@ def _inputs(obs, wall):
     ``(u, v)`` appended when ``wall`` (:func:`pursuit_bench.agents.dqn.wall_features`)."""
     rows, n_obs = obs.shape
     out = np.empty((rows, n_obs + (2 if wall else 0)), dtype=np.float32)
+    _fill_inputs(obs, wall, out)
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _fill_inputs(obs, wall, out):
+    """:func:`_inputs` written into ``out`` (B, n_obs [+ 2])."""
+    rows, n_obs = obs.shape
     out[:, :n_obs] = obs
     if wall:
         for i in range(rows):
@@ -98,32 +106,54 @@ def _inputs(obs, wall):
             lx, ly = (dx / scale, dy / scale) if norm > 0 else (np.float32(1.0), np.float32(0.0))
             out[i, n_obs] = x * lx + y * ly
             out[i, n_obs + 1] = y * lx - x * ly
-    return out
 
 
 @numba.njit(cache=True, error_model="numpy")
 def _dense_relu(x, w, b):
     """``relu(x @ w + b)``."""
-    out = np.dot(x, w)
-    for i in range(out.shape[0]):
-        for j in range(out.shape[1]):
-            value = out[i, j] + b[j]
-            out[i, j] = value if value > 0 else np.float32(0.0)
+    out = np.empty((x.shape[0], w.shape[1]), dtype=np.float32)
+    _dense_relu_into(x, w, b, out)
     return out
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _forward(x, p):
-    """Q-values (B, A), V(s) (B,) and the hidden layers of one member for inputs x (B, in)."""
+def _dense_relu_into(x, w, b, out):
+    """``relu(x @ w + b)`` written into ``out`` (BLAS writes the product there)."""
+    np.dot(x, w, out)
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
+            value = out[i, j] + b[j]
+            out[i, j] = value if value > 0 else np.float32(0.0)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _layers(rows, n_actions):
+    """Room for one member's forward pass of ``rows`` inputs: the hidden layers h1, h2, hv, ha,
+    the advantages, the Q-values and V(s); made once per call and used by member after member
+    (fresh arrays for every member and layer cost more than their arithmetic)."""
+    return (
+        np.empty((rows, TRUNK[0]), dtype=np.float32),
+        np.empty((rows, TRUNK[1]), dtype=np.float32),
+        np.empty((rows, HEAD), dtype=np.float32),
+        np.empty((rows, HEAD), dtype=np.float32),
+        np.empty((rows, n_actions), dtype=np.float32),
+        np.empty((rows, n_actions), dtype=np.float32),
+        np.empty(rows, dtype=np.float32),
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _forward(x, p, layers):
+    """One member's forward pass for inputs x (B, in) into ``layers`` (:func:`_layers` of B
+    rows): the hidden layers, the advantages, the Q-values (B, A) and V(s) (B,)."""
     w1, b1, w2, b2, wv1, bv1, wv2, bv2, wa1, ba1, wa2, ba2 = p
-    h1 = _dense_relu(x, w1, b1)
-    h2 = _dense_relu(h1, w2, b2)
-    hv = _dense_relu(h2, wv1, bv1)
-    ha = _dense_relu(h2, wa1, ba1)
-    advantage = np.dot(ha, wa2)
+    h1, h2, hv, ha, advantage, q, value = layers
+    _dense_relu_into(x, w1, b1, h1)
+    _dense_relu_into(h1, w2, b2, h2)
+    _dense_relu_into(h2, wv1, bv1, hv)
+    _dense_relu_into(h2, wa1, ba1, ha)
+    np.dot(ha, wa2, advantage)
     rows, n_actions = advantage.shape
-    value = np.empty(rows, dtype=np.float32)
-    q = np.empty_like(advantage)
     for i in range(rows):
         v = bv2[0]
         for k in range(hv.shape[1]):
@@ -136,7 +166,6 @@ def _forward(x, p):
         mean /= np.float32(n_actions)
         for j in range(n_actions):
             q[i, j] = v + advantage[i, j] - mean
-    return q, value, h1, h2, hv, ha
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -146,11 +175,14 @@ def q_and_value_kernel(flat, offsets, n_actions, obs, wall, first=0):
     n_in = n_obs + (2 if wall else 0)
     q = np.empty((members, rows, n_actions), dtype=np.float32)
     value = np.empty((members, rows), dtype=np.float32)
+    inputs = np.empty((rows, n_in), dtype=np.float32)
+    layers = _layers(rows, n_actions)
     for m in range(members):
         p = _weights(flat, offsets, first + m, n_in, n_actions)
-        q_m, v_m, _, _, _, _ = _forward(_inputs(obs[m], wall), p)
-        q[m] = q_m
-        value[m] = v_m
+        _fill_inputs(obs[m], wall, inputs)
+        _forward(inputs, p, layers)
+        q[m] = layers[5]
+        value[m] = layers[6]
     return q, value
 
 
@@ -197,11 +229,12 @@ def act_kernel(flat, offsets, n_actions, obs, wall, generators, epsilon):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _backward_dense(x, grad_out, w, grad_w, grad_b):
-    """Write ``x.T @ grad_out`` into grad_w and the column sums into grad_b; the input's gradient."""
-    grad_w[:, :] = np.dot(x.T, grad_out)
+def _backward_dense(x, grad_out, w, grad_w, grad_b, grad_in):
+    """Write ``x.T @ grad_out`` into grad_w, the column sums into grad_b and the input's gradient
+    ``grad_out @ w.T`` into grad_in (BLAS writes each product where it belongs: no copies)."""
+    np.dot(x.T, grad_out, grad_w)
     _column_sums(grad_out, grad_b)
-    return np.dot(grad_out, w.T)
+    np.dot(grad_out, w.T, grad_in)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -227,14 +260,23 @@ def update_kernel(
     losses = np.empty(members, dtype=np.float32)
     td = np.empty((members, rows), dtype=np.float32)
     both = np.empty((2 * rows, n_in), dtype=np.float32)
+    online_layers, target_layers = _layers(2 * rows, n_actions), _layers(rows, n_actions)
+    # the backward pass's arrays, made once and used by member after member
+    grad_q = np.empty((rows, n_actions), dtype=np.float32)
+    grad_value = np.empty(rows, dtype=np.float32)
+    grad_hv, grad_ha = np.empty((rows, HEAD), dtype=np.float32), np.empty((rows, HEAD), dtype=np.float32)
+    grad_h2, grad_h2_value = np.empty((rows, TRUNK[1]), dtype=np.float32), np.empty((rows, TRUNK[1]), dtype=np.float32)
+    grad_h1 = np.empty((rows, TRUNK[0]), dtype=np.float32)
     for m in range(members):
         p = _weights(online, offsets, m, n_in, n_actions)
         g = _weights(grad, offsets, m, n_in, n_actions)
-        both[:rows] = _inputs(obs[m], wall)
-        both[rows:] = _inputs(next_obs[m], wall)
-        q, _, h1, h2, hv, ha = _forward(both, p)
-        q_target = _forward(both[rows:], _weights(target, offsets, m, n_in, n_actions))[0]
-        grad_q = np.zeros((rows, n_actions), dtype=np.float32)
+        _fill_inputs(obs[m], wall, both[:rows])
+        _fill_inputs(next_obs[m], wall, both[rows:])
+        _forward(both, p, online_layers)
+        h1, h2, hv, ha, _, q, _ = online_layers
+        _forward(both[rows:], _weights(target, offsets, m, n_in, n_actions), target_layers)
+        q_target = target_layers[5]
+        grad_q[:] = np.float32(0.0)
         total = np.float32(0.0)
         for i in range(rows):
             best = 0
@@ -254,7 +296,6 @@ def update_kernel(
             grad_q[i, actions[m, i]] = weights[m, i] / np.float32(rows) * clipped
         losses[m] = total / np.float32(rows)
         # Q = V + A - mean(A): dV = Σ_a dQ, dA = dQ - Σ_a dQ / A
-        grad_value = np.empty(rows, dtype=np.float32)
         grad_advantage = grad_q
         for i in range(rows):
             summed = np.float32(0.0)
@@ -266,9 +307,8 @@ def update_kernel(
         _, _, w2, _, wv1, _, wv2, _, wa1, _, wa2, _ = p
         gw1, gb1, gw2, gb2, gwv1, gbv1, gwv2, gbv2, gwa1, gba1, gwa2, gba2 = g
         ha_s, hv_s, h2_s, h1_s = ha[:rows], hv[:rows], h2[:rows], h1[:rows]
-        grad_ha = _backward_dense(ha_s, grad_advantage, wa2, gwa2, gba2)
+        _backward_dense(ha_s, grad_advantage, wa2, gwa2, gba2, grad_ha)
         # the value head's one output: dw = hv.T @ dV, dhv = dV wv2
-        grad_hv = np.empty((rows, HEAD), dtype=np.float32)
         gbv2[0] = np.float32(0.0)
         for k in range(HEAD):
             gwv2[k] = np.float32(0.0)
@@ -281,17 +321,19 @@ def update_kernel(
             for k in range(HEAD):
                 if ha_s[i, k] <= 0:
                     grad_ha[i, k] = np.float32(0.0)
-        grad_h2 = _backward_dense(h2_s, grad_ha, wa1, gwa1, gba1) + _backward_dense(h2_s, grad_hv, wv1, gwv1, gbv1)
+        _backward_dense(h2_s, grad_ha, wa1, gwa1, gba1, grad_h2)
+        _backward_dense(h2_s, grad_hv, wv1, gwv1, gbv1, grad_h2_value)
+        grad_h2 += grad_h2_value  # the two streams' sum
         for i in range(rows):
             for k in range(TRUNK[1]):
                 if h2_s[i, k] <= 0:
                     grad_h2[i, k] = np.float32(0.0)
-        grad_h1 = _backward_dense(h1_s, grad_h2, w2, gw2, gb2)
+        _backward_dense(h1_s, grad_h2, w2, gw2, gb2, grad_h1)
         for i in range(rows):
             for k in range(TRUNK[0]):
                 if h1_s[i, k] <= 0:
                     grad_h1[i, k] = np.float32(0.0)
-        gw1[:, :] = np.dot(both[:rows].T, grad_h1)
+        np.dot(both[:rows].T, grad_h1, gw1)
         _column_sums(grad_h1, gb1)
     return losses, td
 
