@@ -1,12 +1,16 @@
 """Parallel navigation against a prey at constant velocity, and the rule's pure-function form."""
 
+import numba
 import numpy as np
 import pytest
 
 from pursuit_bench.env import task
 from pursuit_bench.env.world import DAMPING, DT, make_world
 from pursuit_bench.rules.navigation import (
+    _DIRS,
+    _PHYSICS,
     APPROACH_DIRECTIONS,
+    TIE_TOLERANCE,
     _python_mod,
     constant_bearing_angle,
     parallel_navigation,
@@ -129,10 +133,38 @@ def test_the_compiled_rule_is_the_rules_numpy_form() -> None:
         assert [parallel_navigation(observations[0, i], 1) for i in range(5)] == one_mode.tolist()
 
 
+@numba.njit
+def _rule_as_written(obs, modes, dirs, approach, chase, accel_stalk, accel_chase, damping, dt):
+    """The compiled rule as it was before it chose candidates (every direction's angle and
+    distance, the angle wrapped by ``%``): what the candidates must not change, bit for bit."""
+    out = np.empty(obs.shape[0], dtype=np.int64)
+    for r in range(obs.shape[0]):
+        accel = accel_chase if modes[r] == chase else accel_stalk
+        px, py = np.float64(obs[r, 6]), np.float64(obs[r, 7])
+        nx = px + np.float64(obs[r, 8]) * dt
+        ny = py + np.float64(obs[r, 9]) * dt
+        vx, vy = np.float64(obs[r, 2]), np.float64(obs[r, 3])
+        phi = np.arctan2(py, px)
+        best_change, choice, best_distance = np.inf, 0, np.inf
+        change = np.empty(len(approach))
+        distance = np.empty(len(approach))
+        for k in range(len(approach)):
+            lx = nx - ((1.0 - damping) * vx + accel * dt * dirs[k, 0]) * dt
+            ly = ny - ((1.0 - damping) * vy + accel * dt * dirs[k, 1]) * dt
+            change[k] = abs((np.arctan2(ly, lx) - phi + np.pi) % (2 * np.pi) - np.pi)
+            distance[k] = np.hypot(lx, ly)
+            best_change = min(best_change, change[k])
+        for k in range(len(approach)):
+            if change[k] <= best_change + TIE_TOLERANCE and distance[k] < best_distance:
+                best_distance, choice = distance[k], k
+        out[r] = approach[choice]
+    return out
+
+
 def test_the_rule_keeps_every_direction_it_needs_on_hard_cases() -> None:
-    """Against the numpy form where choosing the candidates could go wrong: exact and near ties
-    (symmetric layouts, the prey dead ahead or behind), vectors of zero length, tiny and huge
-    scales, infinities and NaN."""
+    """Against the rule as written before it chose candidates, where choosing them could go wrong:
+    exact and near ties (symmetric layouts, the prey dead ahead or behind), vectors of zero
+    length, tiny and huge scales, infinities and NaN; float64 and float32."""
     rng = np.random.default_rng(1)
     rows = []
     for scale in (1e-300, 1e-200, 1e-8, 1.0, 1e8, 1e200, 1e300):
@@ -153,10 +185,13 @@ def test_the_rule_keeps_every_direction_it_needs_on_hard_cases() -> None:
     odd[50:60, 6:10] = odd[50:60, 6:10] * 1e160
     rows.append(odd)
     obs = np.concatenate(rows)
-    for mode in (0, 1):
-        modes = np.full(len(obs), mode)
-        with np.errstate(all="ignore"):
-            np.testing.assert_array_equal(parallel_navigation(obs, modes), _rule_in_numpy(obs, modes))
+    with np.errstate(over="ignore"):  # the huge rows become infinities in float32: cases too
+        single = obs.astype(np.float32)
+    for observations in (obs, single):
+        for mode in (0, 1):
+            modes = np.full(len(observations), mode)
+            expected = _rule_as_written(observations, modes, _DIRS, APPROACH_DIRECTIONS, *_PHYSICS)
+            np.testing.assert_array_equal(parallel_navigation(observations, modes), expected)
 
 
 def test_the_rules_remainder_is_pythons() -> None:

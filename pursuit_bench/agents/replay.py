@@ -315,6 +315,8 @@ def _store(
     on (wrapping), each at its member's largest priority so far, and update the trees (each
     touched parent recomputed from its children once they are final, as :func:`_tree_set` does)."""
     members, k = new_actions.shape
+    if k == 0:
+        return
     capacity = actions.shape[1]
     last = position + k - 1  # the slots position … last, modulo the capacity
     for m in range(members):

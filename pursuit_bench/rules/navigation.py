@@ -98,7 +98,9 @@ def _parallel_navigation(obs, modes, dirs, approach, chase, accel_stalk, accel_c
 
 #: :func:`_candidates` keeps the directions whose pseudo-angle is within this of the smallest.
 CANDIDATE_MARGIN = 1e-9
-#: ... when every product it forms lies between these (else it keeps every direction).
+#: ... when each direction's scale (``c + s`` or ``s - c`` below) lies between these (else it keeps
+#: every direction): the products may then underflow, by at most 5e-324, far below the scale's
+#: 1e-16 that the bound allows.
 _CANDIDATE_RANGE = (1e-250, 1e250)
 
 
@@ -111,7 +113,8 @@ def _candidates(px, py, lxs, lys, pseudo, considered):
     The pseudo-angle ``s / (c + s)`` (``c ≥ 0``), ``1 - c / (s - c)`` (``c < 0``), with ``c`` the
     dot and ``s`` the absolute cross product, grows with the angle θ between the two at a rate
     between 1/2 and 1 and is computed to a few 1e-16 (no cancellation: ``c + s`` and ``s - c``
-    are at least ``|l| |p|``). The rule's change of φ is θ to a few 1e-16 too. So a direction
+    are at least ``|l| |p|``). The rule's change of φ is θ to about 2e-15 (four roundings near
+    2π). So a direction
     whose change is within :data:`TIE_TOLERANCE` of the smallest has a pseudo-angle within about
     1e-12 of the smallest, far inside the margin: every direction the rule's choice depends on
     is kept (usually the only one kept is the choice). Where the products are zero, tiny, huge or
@@ -133,8 +136,9 @@ def _candidates(px, py, lxs, lys, pseudo, considered):
 @numba.njit(cache=True)
 def _python_mod(x, period):
     """Python's ``x % period`` for ``period > 0``, the same bits, without a call to ``fmod`` for
-    ``x`` in ``(-period, 2 period)`` (where the rule's angles lie): there ``fmod`` is ``x`` or
-    the exact ``x - period``, and Python adds ``period`` to a negative remainder; elsewhere ``%``."""
+    ``x`` in ``(-period, 2 period)`` but ±0 (where the rule's angles lie): there ``fmod`` is ``x``
+    or the exact ``x - period``, and Python adds ``period`` to a negative remainder; elsewhere
+    (±0, NaN, infinities, the rest) ``%`` itself."""
     if 0.0 < x < period:
         return x
     if period <= x < 2.0 * period:

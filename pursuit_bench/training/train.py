@@ -58,6 +58,8 @@ class Group:
     member of a run alone, or its predators): their rows are one slice."""
 
     def __post_init__(self) -> None:
+        if not self.indices or len(self.indices) != len(self.runs):
+            raise ValueError(f"a group: expected one run per member, got indices {self.indices}, runs {self.runs}")
         first = self.indices[0]
         one_run = all(r == self.runs[0] for r in self.runs)
         consecutive = self.indices == list(range(first, first + len(self.indices)))
@@ -219,12 +221,12 @@ class Run:
         """Report the episodes that ended in ``arenas`` this step, in arena order."""
         lengths = info["episode_length"][arenas]
         chase = (self.chase_steps[arenas] / lengths[:, None]).tolist()
-        self.chase_steps[arenas] = 0.0
         extra: dict[str, float] = {f"loss/{a}": loss for a, loss in self.last_losses.items()}
         if self.learner is not None:
             extra.update({"epsilon": self.learner.epsilon, "beta": self.learner.beta})
         returns, captured = info["episode_return"][arenas].tolist(), info["captured"][arenas].tolist()
         for k, (arena, length) in enumerate(zip(arenas.tolist(), lengths.tolist(), strict=True)):
+            self.chase_steps[arena] = 0.0  # each arena's count reset as its episode is reported
             trace = None
             if self.traces is not None:
                 world = self.env.core.world
@@ -364,7 +366,8 @@ class Trainer:
     one, no Rerun call is made.
 
     ``agents``, ``episodes_done``, ``env``, ``state_dict`` and ``load_state_dict`` speak of
-    run 0, the only one when K = 1; ``runs[r]`` holds run r."""
+    run 0, the only one when K = 1; ``runs[r]`` holds run r. A run's agents are fixed when the
+    trainer is made (the loop keeps its scripted agents' places from then)."""
 
     def __init__(
         self,
@@ -462,6 +465,7 @@ class Trainer:
 
         steps = {r: self.runs[r].env.step(actions[r]) for r in active}
         # what each arena's agents saw next: the ended episodes' last observations, not the new ones
+        # (VectorPursuitEnv's final_obs is every arena's observation before its autoreset)
         real_next = {r: info["final_obs"] for r, (_, _, _, _, info) in steps.items()}
         rewards_of = {r: step[1] for r, step in steps.items()}
         terminated_of = {r: step[2] for r, step in steps.items()}
