@@ -77,8 +77,6 @@ class FlatAdam:
         self.step_count = 0
         # numpy views of the buffers (never rebound) for the compiled step
         self._buffers = (self.flat.numpy(), self.grad.numpy(), self._m.numpy(), self._v.numpy())
-        self._constants_of: tuple[float, float] | None = None  # the betas _constants were made from
-        self._constants: tuple[np.float32, np.float32, np.float32] = (np.float32(0), np.float32(0), np.float32(0))
 
     def zero_grad(self) -> None:
         self.grad.zero_()
@@ -94,12 +92,11 @@ class FlatAdam:
         caller adds the step to ``step_count`` once it is taken."""
         beta1, beta2 = self.betas
         f32 = np.float32
-        if self._constants_of is not self.betas:  # the step's scalars that do not depend on it, made once
-            self._constants = (f32(1 - beta1), f32(beta2), f32(1 - beta2))
-            self._constants_of = self.betas
         return (
             *self._buffers,
-            *self._constants,
+            f32(1 - beta1),
+            f32(beta2),
+            f32(1 - beta2),
             f32(self.lr / (1 - beta1**step)),
             f32(math.sqrt(1 - beta2**step)),
             f32(self.eps),

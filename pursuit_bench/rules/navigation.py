@@ -114,11 +114,10 @@ def _candidates(px, py, lxs, lys, pseudo, considered):
     dot and ``s`` the absolute cross product, grows with the angle θ between the two at a rate
     between 1/2 and 1 and is computed to a few 1e-16 (no cancellation: ``c + s`` and ``s - c``
     are at least ``|l| |p|``). The rule's change of φ is θ to about 2e-15 (four roundings near
-    2π). So a direction
-    whose change is within :data:`TIE_TOLERANCE` of the smallest has a pseudo-angle within about
-    1e-12 of the smallest, far inside the margin: every direction the rule's choice depends on
-    is kept (usually the only one kept is the choice). Where the products are zero, tiny, huge or
-    not numbers, every direction is kept (the rule as written out)."""
+    2π). So a direction whose change is within :data:`TIE_TOLERANCE` of the smallest has a
+    pseudo-angle within about 1e-12 of the smallest, far inside the margin: every direction the
+    rule's choice depends on is kept (usually the only one kept is the choice). Where the products
+    are zero, tiny, huge or not numbers, every direction is kept (the rule as written out)."""
     lowest = np.inf
     for k in range(len(lxs)):
         c = lxs[k] * px + lys[k] * py

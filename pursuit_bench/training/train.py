@@ -77,15 +77,11 @@ class Group:
     def put(self, actions: Mapping[int, np.ndarray], env_actions: Sequence[np.ndarray] | np.ndarray) -> None:
         """Write member m's env actions ``env_actions[m]``, (B, 2) ``(mode, direction)`` pairs or
         (B,) directions, into its run's actions ``actions[r]`` (B, n_agents, 2): one assignment when
-        the members are a slice of one run's agents and their actions one array (M, B, …)."""
-        if self.span is not None and isinstance(env_actions, np.ndarray):
+        the members are a slice of one run's agents and their pairs one array (M, B, 2)."""
+        if self.span is not None and isinstance(env_actions, np.ndarray) and env_actions.ndim == 3:
             run, agents = self.span
-            if env_actions.ndim == 3:
-                actions[run][:, agents] = env_actions.swapaxes(0, 1)
-                return
-            if env_actions.ndim == 2:
-                actions[run][:, agents, 1] = env_actions.T
-                return
+            actions[run][:, agents] = env_actions.swapaxes(0, 1)
+            return
         for m, (r, i) in enumerate(zip(self.runs, self.indices, strict=True)):
             put_actions(actions[r], i, env_actions[m])
 
@@ -366,8 +362,7 @@ class Trainer:
     one, no Rerun call is made.
 
     ``agents``, ``episodes_done``, ``env``, ``state_dict`` and ``load_state_dict`` speak of
-    run 0, the only one when K = 1; ``runs[r]`` holds run r. A run's agents are fixed when the
-    trainer is made (the loop keeps its scripted agents' places from then)."""
+    run 0, the only one when K = 1; ``runs[r]`` holds run r."""
 
     def __init__(
         self,
@@ -390,11 +385,6 @@ class Trainer:
         for group in self.groups:
             for r in group.runs:
                 self.runs[r].learner = self.runs[r].learner or group.learner
-        # each run's scripted agents, by their place among its agents
-        self._scripted = [
-            [(i, agent) for i, agent in enumerate(run.agents.values()) if isinstance(agent, ScriptedAgent)]
-            for run in self.runs
-        ]
 
     @property
     def config(self) -> TrainConfig:
@@ -460,8 +450,10 @@ class Trainer:
                         self.runs[r].q_values[:, i], self.runs[r].values[:, i] = agent.mode_q(q[m]), v[m]
         for r in active:
             run = self.runs[r]
-            for i, scripted in self._scripted[r]:
-                put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
+            for i, name in enumerate(run.names):
+                scripted = run.agents[name]
+                if isinstance(scripted, ScriptedAgent):
+                    put_actions(actions[r], i, scripted.act_batch(run.obs[:, i]))
 
         steps = {r: self.runs[r].env.step(actions[r]) for r in active}
         # what each arena's agents saw next: the ended episodes' last observations, not the new ones
