@@ -73,3 +73,35 @@ def test_the_evaluation_is_labelled_and_repeats_exactly() -> None:
     # the trained variant's episodes are those of the variant played alone
     alone = play_variants("1p-low", [(agents, {"prey_0": 0.1})], 4, seed=2, num_envs=2)[0]
     assert first["panels"][0]["trained"] == pytest.approx(alone.returns[:, 0].mean(), abs=0)
+
+
+@pytest.mark.parametrize("obstacles", [0, 3])
+def test_a_queued_start_is_the_start_its_seed_draws_and_is_used_once(obstacles: int) -> None:
+    """``first_start`` gives what ``reset`` with the episode's seed draws; an arena whose next
+    start is queued starts from it at its autoreset, and draws again after that."""
+    from pursuit_bench.env.vector import VectorPursuitEnv
+
+    drawn = VectorPursuitEnv(2, "2p-high-shared", obstacles=obstacles)
+    drawn.reset(seed=0)
+    drawn.reseed(0, 11)
+    queued = VectorPursuitEnv(2, "2p-high-shared", obstacles=obstacles)
+    queued.reset(seed=0)
+    layout, around = queued.core.first_start(np.random.default_rng(11))
+    queued.queue_starts(np.array([0]), layout[None], around[None] if obstacles else None)
+    # a queued start is not the draw the arena's own generator would make (the test can fail)
+    assert not np.array_equal(layout, queued.core.first_start(np.random.default_rng(12))[0])
+    ends = 0
+    stay = np.zeros((2, drawn.n_agents, 2), dtype=np.int64)  # stalk, direction 0: the walls end it
+    while ends < 2:
+        a, _, term_a, trunc_a, _ = drawn.step(stay)
+        b, *_ = queued.step(stay)
+        np.testing.assert_array_equal(a[1], b[1])
+        if term_a[0].any() or trunc_a[0].any():
+            ends += 1
+            if ends == 1:  # the first restart: the seed's draw in one, the queued copy in the other
+                np.testing.assert_array_equal(a[0], b[0])
+                np.testing.assert_array_equal(drawn.obstacles[0], queued.obstacles[0])
+            else:  # the second: the queue was used up, each arena draws from its own generator
+                assert not np.array_equal(a[0], b[0])
+        else:
+            np.testing.assert_array_equal(a[0], b[0])

@@ -133,3 +133,44 @@ def test_accelerations_of_another_shape_are_refused_not_broadcast(backend: str) 
     assert checked_accelerations(world.velocities, accelerations).dtype == np.float64
     world.step(accelerations)
     np.testing.assert_array_equal(world.velocities, accelerations.astype(np.float64) * DT)
+
+
+@pytest.mark.parametrize("wall_rule", ["terminate", "contain"])
+@pytest.mark.parametrize("n_agents", [2, 4])
+def test_captures_are_the_contacts_pymunk_reports(wall_rule: str, n_agents: int) -> None:
+    """The world decides a capture after pymunk's step (issue 62); the reference is pymunk's own
+    contact pipeline: a pre-solve callback on every predator–prey pair of the same bodies, in arenas
+    where no disk was put back at a wall (there the capture is decided again, on the final positions)."""
+    import pymunk
+
+    arenas = 120
+    world = make_world("pymunk", arenas, n_agents, wall_rule=wall_rule)
+    assert world.__class__.__name__ == "PymunkWorld"
+    disks = [s for s in world.space.shapes if isinstance(s, pymunk.Circle) and s.body.body_type == pymunk.Body.DYNAMIC]  # type: ignore[attr-defined]
+    reported = np.zeros((arenas, n_agents - 1), dtype=bool)
+    for k, disk in enumerate(disks):
+        arena, agent = divmod(k, n_agents)
+        if agent == n_agents - 1:
+            disk.collision_type, disk.filter = 2, pymunk.ShapeFilter()  # the prey collides with the predators
+            continue
+        disk.collision_type = 100 + k
+
+        def pre_solve(arbiter: pymunk.Arbiter, space: pymunk.Space, data: tuple[int, int]) -> None:
+            reported[data] = True
+            arbiter.process_collision = False  # reported, never solved: the bodies move as without it
+
+        world.space.on_collision(100 + k, 2, pre_solve=pre_solve, data=(arena, agent))  # type: ignore[attr-defined]
+    rng = np.random.default_rng(5)
+    compared = captures = 0
+    for step in range(600):
+        if step % 20 == 0:  # predator 0 starts near the prey: many contacts, many near misses
+            positions = rng.uniform(-0.5, 0.5, (arenas, n_agents, 2))
+            positions[:, 0] = positions[:, -1] + rng.normal(0.0, 0.06, (arenas, 2))
+            world.reset(np.arange(arenas), np.clip(positions, -0.9, 0.9))
+        reported[:] = False
+        contacts = world.step(rng.uniform(-4.0, 4.0, (arenas, n_agents, 2)))
+        untouched = ~contacts.wall.any(axis=1)
+        np.testing.assert_array_equal(contacts.prey[untouched], reported[untouched])
+        compared += int(untouched.sum())
+        captures += int(reported[untouched].sum())
+    assert compared > 30_000 and captures > 3_000

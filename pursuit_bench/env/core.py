@@ -106,15 +106,26 @@ class PursuitCore:
         for k, (arena, rng) in enumerate(zip(arenas.tolist(), rngs, strict=True)):
             owner, ahead = self._starts.get(arena, (None, []))
             if owner is not rng or not ahead:
-                layouts = task.start_layouts(rng, config.n_agents, STARTS_AHEAD)
-                if config.obstacles:
-                    around = place_obstacles(rng, layouts, config.obstacles, config.obstacle_radius)
-                else:
-                    around = np.empty((len(layouts), 0, 3))
-                ahead = list(zip(layouts, around, strict=True))[::-1]
+                ahead = self._draw_ahead(rng)
                 self._starts[arena] = (rng, ahead)
             starts[k], placed[k] = ahead.pop()
         return starts, (placed if config.obstacles else None)
+
+    def _draw_ahead(self, rng: np.random.Generator) -> list[tuple[np.ndarray, np.ndarray]]:
+        """``STARTS_AHEAD`` start layouts and their obstacles drawn from ``rng``, last first."""
+        config = self.config
+        layouts = task.start_layouts(rng, config.n_agents, STARTS_AHEAD)
+        if config.obstacles:
+            around = place_obstacles(rng, layouts, config.obstacles, config.obstacle_radius)
+        else:
+            around = np.empty((len(layouts), 0, 3))
+        return list(zip(layouts, around, strict=True))[::-1]
+
+    def first_start(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """The start layout (n_agents, 2) and obstacles (K, 3) an arena given the fresh generator
+        ``rng`` starts its next episode from (``reset`` draws them so): what an evaluation with
+        common random numbers draws once per episode for every arena that plays it."""
+        return self._draw_ahead(rng)[-1]
 
     def state_dict(self) -> dict[str, Any]:
         """The arenas as they are mid-episode (for a checkpoint): the world, the step counts,

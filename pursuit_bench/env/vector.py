@@ -105,6 +105,10 @@ class VectorPursuitEnv:
         self.action_spaces = {a: batch_space(sp, num_envs) for a, sp in self.single_action_spaces.items()}
         self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence().spawn(num_envs)]
         self._returns = np.zeros((num_envs, self.n_agents))
+        # start layouts set for some arenas' next episodes (``queue_starts``): used once, instead of a draw
+        self._queued = np.zeros(num_envs, dtype=bool)
+        self._queued_positions = np.zeros((num_envs, self.n_agents, 2))
+        self._queued_obstacles = np.zeros((num_envs, self.config.obstacles, 3))
 
     @property
     def obstacles(self) -> np.ndarray:
@@ -123,6 +127,7 @@ class VectorPursuitEnv:
             self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(self.num_envs)]
         obs = self.core.reset(np.arange(self.num_envs), self._rngs)
         self._returns[:] = 0.0
+        self._queued[:] = False
         return obs, {}
 
     def reseed(self, arena: int, seed: int) -> None:
@@ -130,6 +135,32 @@ class VectorPursuitEnv:
         seeded ``seed``: what a single env reset with ``seed`` draws first. An evaluation with
         common random numbers gives each episode its own seed this way."""
         self._rngs[arena] = np.random.default_rng(seed)
+
+    def queue_starts(self, arenas: np.ndarray, positions: np.ndarray, obstacles: np.ndarray | None = None) -> None:
+        """Start arenas ``arenas``' next episodes (at their next autoreset, once) from the layouts
+        ``positions`` (len(arenas), n_agents, 2) and, in a task with obstacles, ``obstacles``
+        (len(arenas), K, 3), instead of drawing them. An evaluation with common random numbers
+        draws each episode's start once (``core.first_start``) for every arena that plays it."""
+        arenas = np.asarray(arenas, dtype=np.int64)
+        self._queued_positions[arenas] = task.check_positions(positions, (len(arenas), self.n_agents, 2))
+        if self.config.obstacles:
+            self._queued_obstacles[arenas] = self.core._given_obstacles(obstacles, len(arenas))
+        self._queued[arenas] = True
+
+    def _restart(self, arenas: np.ndarray) -> np.ndarray:
+        """Reset ``arenas`` (ended this step): from their queued layouts where set, else drawn."""
+        queued = self._queued[arenas]
+        if not queued.any():
+            return self.core.reset(arenas, [self._rngs[i] for i in arenas.tolist()])
+        obs = np.empty((len(arenas), self.n_agents, self.obs_size), dtype=np.float32)
+        given = arenas[queued]
+        placed = self._queued_obstacles[given] if self.config.obstacles else None
+        obs[queued] = self.core.reset(given, [], self._queued_positions[given], placed)
+        self._queued[given] = False
+        if not queued.all():
+            drawn = arenas[~queued]
+            obs[~queued] = self.core.reset(drawn, [self._rngs[i] for i in drawn.tolist()])
+        return obs
 
     def state_dict(self) -> dict[str, Any]:
         """Every arena as it is mid-episode, with its generator and return so far: with
@@ -187,7 +218,7 @@ class VectorPursuitEnv:
         ended = done.nonzero()[0]
         if len(ended):
             obs = obs.copy()  # the ended episodes' last observations stay in the info
-            obs[ended] = self.core.reset(ended, [self._rngs[i] for i in ended.tolist()])
+            obs[ended] = self._restart(ended)
             self._returns[ended] = 0.0
         terminated = result.terminated.repeat(self.n_agents).reshape(self.num_envs, self.n_agents)
         truncated = result.truncated.repeat(self.n_agents).reshape(self.num_envs, self.n_agents)

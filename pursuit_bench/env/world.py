@@ -229,14 +229,36 @@ def _prey_overlap(positions: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def _settle_kernel(state, offsets, relative, obstacles, limit, tolerance, contain, captured, reach_squared):
+def _chipmunk_overlap_row(state, b, n, radius, out):
+    """``out[b, i]``: predator i of arena b touches the prey as chipmunk's collision pipeline
+    decides it on the bodies' absolute positions ``state`` (B·n, 4), the test it ran when the
+    contact came from pymunk's callback: the two disks' bounding boxes intersect
+    (``cpBBNewForCircle``, ``cpBBIntersects``) and the squared distance of the centres is below
+    the squared sum of the radii (``CircleToCircle``), each in chipmunk's order of operations."""
+    prey = b * n + n - 1
+    px, py = state[prey, 0], state[prey, 1]
+    reach = radius + radius
+    for i in range(n - 1):
+        qx, qy = state[b * n + i, 0], state[b * n + i, 1]
+        boxes = qx - radius <= px + radius and px - radius <= qx + radius
+        boxes = boxes and qy - radius <= py + radius and py - radius <= qy + radius
+        dx, dy = px - qx, py - qy
+        out[b, i] = boxes and dx * dx + dy * dy < reach * reach
+
+
+@numba.njit(cache=True)
+def _settle_kernel(state, offsets, relative, obstacles, limit, tolerance, contain, arenas, radius, reach_squared):
     """What :meth:`PymunkWorld.step` does after pymunk's step, in one pass: each arena's
     positions (``relative``: less its offset) and velocities from pymunk's body rows ``state``
     (B·n, 4), the obstacles and the walls (:func:`leave_obstacles`, then :func:`touch_walls`, in
-    place), and the captures: pymunk's (``captured`` (B, n - 1), its contact callback's), decided
-    again on the final positions in an arena whose disks were put back. Returns positions,
-    velocities, wall, prey and obstacle contacts, and whether any arena had a disk put back."""
-    arenas, n = captured.shape[0], captured.shape[1] + 1
+    place), and the captures: decided as chipmunk decides a contact, on the positions pymunk's
+    step ends with (:func:`_chipmunk_overlap_row`), and again on the final positions in an arena
+    whose disks were put back. Returns positions, velocities, wall, prey and obstacle contacts,
+    and whether any arena had a disk put back."""
+    n = state.shape[0] // arenas
+    captured = np.empty((arenas, n - 1), dtype=np.bool_)
+    for b in range(arenas):
+        _chipmunk_overlap_row(state, b, n, radius, captured)
     positions = np.empty((arenas, n, 2))
     velocities = np.empty((arenas, n, 2))
     for b in range(arenas):
@@ -251,7 +273,7 @@ def _settle_kernel(state, offsets, relative, obstacles, limit, tolerance, contai
     wall = np.empty((arenas, n), dtype=np.bool_)
     moved = np.empty(arenas, dtype=np.bool_)
     _touch_walls_kernel(positions, velocities, limit, tolerance, contain, wall, moved)
-    prey = captured.copy()
+    prey = captured
     any_moved = False
     for b in range(arenas):
         if moved[b] or pushed[b]:
@@ -314,23 +336,21 @@ class NumpyWorld:
         return Contacts(wall=wall, prey=_prey_overlap(p), obstacle=obstacle)
 
 
-_WALL, _PREY, _OBSTACLE = 1, 3, 4
-#: Predator ``agent`` of arena ``arena`` has the collision type ``_FIRST_PREDATOR + arena ·
-#: n_predators + agent``: a capture's handler is that predator's own and knows where it is.
-_FIRST_PREDATOR = 16
-
-
 class PymunkWorld:
     """The reference backend: every arena in one pymunk ``Space``.
 
     Arenas sit on a square grid, ``2 (half_size + WALL_THICKNESS)`` apart, so they never touch.
-    Predators share a shape-filter group and so pass through each other; predator–prey contacts
-    are reported by a collision callback and never pushed apart (a capture ends the episode).
+    Disks share one shape-filter group and so never collide with each other in pymunk: predators
+    pass through each other, and a predator touching the prey is never pushed apart from it (a
+    capture ends the episode). The capture is decided after pymunk's step, on the positions it
+    ends with, by the test chipmunk's own contact pipeline makes (:func:`_chipmunk_overlap_row`;
+    until issue 62, pymunk's pre-solve callback in Python reported it: the same contacts).
     Under ``contain`` pymunk's solver stops disks at the walls (perfectly inelastic,
-    frictionless); under ``terminate`` the walls are sensors (the episode ends there, nothing is
-    pushed back). Whether a disk touches a wall is decided on its position (:func:`touch_walls`),
-    which also catches every contact pymunk would report. Obstacles are circles on the space's
-    static body, moved at each reset (``unsafe_set_offset``, then reindexed).
+    frictionless); under ``terminate`` there are no wall shapes (they were sensors, with no effect
+    on the bodies, and took four fifths of pymunk's step). Whether a disk touches a wall is decided
+    on its position (:func:`touch_walls`), which also catches every contact pymunk would report.
+    Obstacles are circles on the space's static body, moved at each reset (``unsafe_set_offset``,
+    then reindexed).
     """
 
     def __init__(
@@ -346,7 +366,6 @@ class PymunkWorld:
         self.n_agents = n_agents
         self.wall_rule = wall_rule
         self.limit = half_size - RADIUS
-        self._prey = np.zeros((num_arenas, n_agents - 1), dtype=bool)
 
         space = pymunk.Space()
         space.damping = 1.0  # damping is applied in integrate_velocity, not by pymunk
@@ -361,21 +380,17 @@ class PymunkWorld:
             [[(i % columns) * spacing, (i // columns) * spacing] for i in range(num_arenas)],
             dtype=np.float64,
         )
-        predators = pymunk.ShapeFilter(group=1)
-        for arena, (ox, oy) in enumerate(self.offsets):
-            self._add_walls(ox, oy, half_size)
-            for agent in range(n_agents):
+        disks = pymunk.ShapeFilter(group=1)  # disks never collide with disks in pymunk
+        for ox, oy in self.offsets:
+            if wall_rule == "contain":  # under "terminate" a wall has no effect: none is made
+                self._add_walls(ox, oy, half_size)
+            for _ in range(n_agents):
                 body = pymunk.Body(MASS, float("inf"))  # disks never rotate
                 body.position = (ox, oy)
                 disk = pymunk.Circle(body, RADIUS)
                 disk.friction = 0.0
                 disk.elasticity = 0.0
-                if agent == n_agents - 1:
-                    disk.collision_type = _PREY
-                else:
-                    disk.collision_type = _FIRST_PREDATOR + arena * (n_agents - 1) + agent
-                    disk.filter = predators
-                    space.on_collision(disk.collision_type, _PREY, pre_solve=self._on_capture, data=(arena, agent))
+                disk.filter = disks
                 space.add(body, disk)
         self.obstacles = np.zeros((num_arenas, obstacles, 3))
         if obstacles:
@@ -387,7 +402,6 @@ class PymunkWorld:
         for ox, oy in self.offsets:
             shapes = [pymunk.Circle(space.static_body, 0.0, (ox, oy)) for _ in range(obstacles)]
             for shape in shapes:
-                shape.collision_type = _OBSTACLE
                 shape.friction = 0.0
                 shape.elasticity = 0.0
                 space.add(shape)
@@ -417,16 +431,9 @@ class PymunkWorld:
         corners = [(-c, -c), (c, -c), (c, c), (-c, c)]
         for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1], strict=True):
             wall = pymunk.Segment(self.space.static_body, (ox + ax, oy + ay), (ox + bx, oy + by), t)
-            wall.collision_type = _WALL
-            wall.sensor = self.wall_rule == "terminate"  # the episode ends there: never pushed back
             wall.friction = 0.0
             wall.elasticity = 0.0
             self.space.add(wall)
-
-    def _on_capture(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: tuple[int, int]) -> None:
-        """A predator touches its arena's prey: ``data`` is the predator's (arena, agent)."""
-        self._prey[data] = True
-        arbiter.process_collision = False
 
     def _bodies_state(self) -> np.ndarray:
         """(B·n, 4) every disk's absolute position and velocity as pymunk holds them (a view of
@@ -492,7 +499,6 @@ class PymunkWorld:
             pymunk.batch.set_space_bodies(self.space, pymunk.batch.BodyFields.VELOCITY, self._velocity_buffer)
 
     def step(self, accelerations: np.ndarray) -> Contacts:
-        self._prey.fill(False)
         self._write(accelerations)
         self.space.step(DT)
         # pymunk saw the arenas whose disks we put back at a wall or an obstacle before we did:
@@ -505,7 +511,8 @@ class PymunkWorld:
             self.limit,
             CONTACT_TOLERANCE,
             self.wall_rule == "contain",
-            self._prey,
+            self.num_arenas,
+            RADIUS,
             _CAPTURE_REACH_SQUARED,
         )
         self._moved = moved

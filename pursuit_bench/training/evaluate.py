@@ -238,11 +238,21 @@ def play_variants(
     names, n_pred, steps = env.agents, env.n_agents - 1, env.config.max_steps
     variant = np.arange(n) // arenas
     playing = np.arange(n) % arenas  # each arena's episode now (``episodes`` or more: idle)
-    following = playing + arenas  # the episode it starts next (reserved: its seed is set ahead)
+    following = playing + arenas  # the episode it starts next (reserved: its start is set ahead)
     handed = np.full(count, 2 * arenas)  # per variant, the next episode not yet reserved
+    # every episode's start drawn once, for all the variants that play it: what an arena reset
+    # with the episode's seed draws (the first arenas are reset so; the others queue theirs)
+    firsts = [env.core.first_start(np.random.default_rng(episode_seed(seed, e))) for e in range(episodes)]
+    starts = np.array([layout for layout, _ in firsts]).reshape(episodes, env.n_agents, 2)
+    placed = np.array([around for _, around in firsts]).reshape(episodes, env.config.obstacles, 3)
     obs, _ = env.reset(seed=[episode_seed(seed, int(e)) for e in playing])
-    for row in np.flatnonzero(following < episodes):
-        env.reseed(int(row), episode_seed(seed, int(following[row])))
+
+    def queue(rows: np.ndarray) -> None:
+        if len(rows):  # an idle arena (its variant's episodes all handed out) replays episode 0's start, unheard
+            ahead = np.where(following[rows] < episodes, following[rows], 0)
+            env.queue_starts(rows, starts[ahead], placed[ahead] if env.config.obstacles else None)
+
+    queue(np.arange(n))
     # per agent: rows grouped by actor (one forward pass each), and each row's ε (0: greedy)
     groups: list[list[tuple[Actor, np.ndarray]]] = []
     eps = np.zeros((n, env.n_agents))
@@ -256,12 +266,23 @@ def play_variants(
         groups.append([(actor, np.concatenate(rows)) for actor, rows in by_actor.values()])
     exploring = [i for i in range(env.n_agents) if eps[:, i].any()]
     draws = {i: (np.ones((n, steps)), np.zeros((n, steps), dtype=np.int64)) for i in exploring}
+    # each episode's exploration draws made once for every variant that plays it, kept until the last has
+    players = {i: np.bincount(variant[eps[:, i] > 0], minlength=count).astype(bool).sum() for i in exploring}
+    made: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, int]] = {}
 
     def redraw(rows: np.ndarray) -> None:
         for i in exploring:
             n_actions = next(a.n_actions for a, _ in groups[i] if isinstance(a, LearningAgent))
-            for row in rows[(eps[rows, i] > 0) & (playing[rows] < episodes)]:
-                draws[i][0][row], draws[i][1][row] = exploration_draws(seed, int(playing[row]), i, steps, n_actions)
+            for row in rows[(eps[rows, i] > 0) & (playing[rows] < episodes)].tolist():
+                key = (i, int(playing[row]))
+                if key not in made:
+                    made[key] = (*exploration_draws(seed, key[1], i, steps, n_actions), int(players[i]))
+                uniform, action, left = made[key]
+                draws[i][0][row], draws[i][1][row] = uniform, action
+                if left == 1:
+                    del made[key]
+                else:
+                    made[key] = (uniform, action, left - 1)
 
     redraw(np.arange(n))
     shapes = {
@@ -338,8 +359,7 @@ def play_variants(
                     recorder.log_episode(e + 1, trace)
             playing[row], following[row] = following[row], int(handed[v])
             handed[v] += 1
-            if following[row] < episodes:  # idle arenas keep their generator (no fresh draws)
-                env.reseed(int(row), episode_seed(seed, int(following[row])))
+        queue(ended)
         chase[ended] = travelled[ended] = collisions[ended] = contact[ended] = 0.0
         step[ended] = 0
         redraw(ended)
