@@ -1,0 +1,338 @@
+"""The budget study's driver (issue 63; PROTOCOL.md and PLAN.md beside this file): trains each
+condition's population, then the judged runs, to 10^6 episodes, cheapest conditions first, and
+writes each condition's population at every budget.
+
+Every run has two parts. Its first 15,000 episodes are trained by the rule study's own plan
+(``first/``: the same sweep plan, so the same run), and a population member's prey there must
+equal the committed rule-study member's to the bit (else the driver stops). Then the run folder is
+copied into ``on/`` (atomically: a run there is complete or absent) and trained on from that
+checkpoint to 10^6 by a plan that differs only in its length and its kept checkpoints (exact:
+a resumed run equals one trained in one go). Run it against the study's pinned build:
+
+    cd /work/main && PYTHONPATH=/work/budget-build nohup nice -n 19 .venv/bin/python \\
+        studies/budget/run.py --workers 1 > /dev/null 2>&1 &        # start, or resume: the same command
+    kill -TERM "$(cat /work/budget-study/driver.pid)"               # stop cleanly (checkpoints; exit 143)
+    tail -f /work/budget-study/progress.log                         # progress
+
+The driver holds its work folder's lock, refuses a package other than ``build.json``'s (and,
+once started, other than the one it started with: ``study.json``), and on SIGTERM or SIGINT stops
+its workers (each checkpoints its stack) and exits 143; the same command resumes exactly.
+Evaluation is not here yet: it is added before the first judged evaluation, by PROTOCOL.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import design
+
+HERE = Path(__file__).resolve().parent
+WORK = Path("/work/budget-study")
+STAGES = ("population", "judged")
+
+
+def log(work: Path, line: str) -> None:
+    stamped = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M:%S} {line}"
+    print(stamped, flush=True)
+    with (work / "progress.log").open("a") as file:
+        file.write(stamped + "\n")
+
+
+def package_build() -> dict[str, str]:
+    """The build of the package this process imports: its checkout's commit and fingerprints.
+    SystemExit if the package has uncommitted .py changes (a run is never trained by code that
+    no commit holds)."""
+    import pursuit_bench
+
+    root = Path(pursuit_bench.__file__).resolve().parents[1]
+
+    def git(*command: str) -> str:
+        return subprocess.run(["git", *command], cwd=root, capture_output=True, text=True, check=True).stdout
+
+    dirty = [line for line in git("status", "--porcelain", "--", "pursuit_bench").splitlines() if line.endswith(".py")]
+    if dirty:
+        raise SystemExit(f"{root}: the package has uncommitted code changes ({dirty[0].strip()} …): not a build")
+    return {
+        "commit": git("rev-parse", "HEAD").strip(),
+        **design.fingerprints(git("ls-files", "-s", "--", "pursuit_bench")),
+    }
+
+
+def check_build(work: Path, current: dict[str, str], pinned: dict[str, str]) -> None:
+    """SystemExit unless the package is the pinned build (``build.json``) and the one the
+    study's work folder started with (``study.json``, written at the first start)."""
+    for key in ("code", "training_code"):
+        if current[key] != pinned[key]:
+            raise SystemExit(
+                f"the package is not the study's build: {key} {current[key]} (commit {current['commit'][:10]}), "
+                f"build.json pins {pinned[key]} (commit {pinned['commit'][:10]}); "
+                f"run with PYTHONPATH set to a checkout of {pinned['commit'][:10]}"
+            )
+    path = work / "study.json"
+    if path.exists():
+        started = json.loads(path.read_text())
+        if started["code"] != current["code"]:
+            raise SystemExit(f"{path}: the study started with code {started['code']}, now {current['code']}")
+    else:
+        path.write_text(json.dumps(current, indent=2) + "\n")
+
+
+def sweep(work: Path, folder: Path, plan: Any, workers: int, stop: list[bool]) -> bool:
+    """Train ``plan``'s runs in ``folder`` (resuming what is there); whether all are done."""
+    from pursuit_bench.training.sweep import open_sweep, run_sweep
+
+    note = open_sweep(folder, plan)
+    if note:
+        log(work, note)
+
+    def heard(kind: str, name: str, value: Any) -> None:
+        if kind == "done":
+            log(work, f"trained {name}")
+
+    return run_sweep(folder, plan, workers=workers, record=False, on_message=heard, should_stop=lambda: stop[0])
+
+
+def trained(folder: Path, episodes: int) -> bool:
+    """Whether a run folder holds a checkpoint of at least ``episodes`` episodes."""
+    from pursuit_bench.training import runs
+
+    try:
+        return int(runs.load_checkpoint(folder)["episodes_done"]) >= episodes
+    except (ValueError, FileNotFoundError):
+        return False
+
+
+def carry_on(first: Path, on: Path, plan: Any, name: str) -> None:
+    """Make ``on/runs/<name>`` the run of ``first`` set to train on by ``plan``: its config (the
+    longer length; every budget but the last kept), metrics and checkpoint, that checkpoint also
+    as the first budget's. Written beside and renamed into place: the folder is whole or absent."""
+    from pursuit_bench.training import runs
+
+    config, settings = runs.read_config(first)
+    if name not in plan.runs():
+        raise SystemExit(f"{first}: its run is not the plan's: {name} is not among its runs")
+    target = plan.runs()[name]
+    if config.to_dict() | {"episodes": target.episodes, "agent": target.agent.to_dict()} != target.to_dict():
+        raise SystemExit(f"{first}: its run is not the plan's {name} but for the length")
+    state = runs.load_checkpoint(first)
+    done = int(state["episodes_done"])
+    if done != config.episodes:
+        raise SystemExit(f"{first}: trained {done} of {config.episodes} episodes; expected its end")
+    scratch = on / "runs" / f".{name}.tmp"
+    if scratch.exists():
+        shutil.rmtree(scratch)
+    scratch.mkdir(parents=True)
+    runs.write_config(scratch, target, {**settings, "keep_checkpoints": list(plan.keep_checkpoints)})
+    shutil.copy2(first / runs.METRICS, scratch / runs.METRICS)
+    shutil.copy2(first / runs.CHECKPOINT, scratch / runs.CHECKPOINT)
+    shutil.copy2(first / runs.CHECKPOINT, scratch / runs.milestone_checkpoint(done))
+    os.replace(scratch, on / "runs" / name)
+
+
+def population_check(work: Path, condition: str, kind: str, run: Path, committed: Path | None) -> None:
+    """SystemExit unless the run's prey at its first part's end equals the committed member's."""
+    from pursuit_bench.training import runs
+
+    member = f"{kind}-seed{run.name.rsplit('seed', 1)[1]}"
+    equal, differs = design.prey_equals_committed(run, runs.CHECKPOINT, condition, member, committed)
+    if not equal:
+        log(work, f"{run.name}: prey at 15,000 episodes differs from the committed {member} ({differs[:3]}): stopped")
+        raise SystemExit(f"{run.name}: not the rule study's run (prey tensors differ: {', '.join(differs[:3])})")
+    log(work, f"{run.name}: prey at its first part's end equals the committed {condition}/{member} to the bit")
+
+
+def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> bool:
+    """One sweep's runs through both parts; whether they are done."""
+    trial = args.trial
+    tag = f"{stage}-{kind}-{condition}" if stage == "population" else f"judged-{condition}"
+    on_plan = design.continuation_plan(stage, condition, kind, args.budgets, **trial)
+    on = args.work / "on" / tag
+    names = sorted(on_plan.runs())
+    if all(trained(on / "runs" / n, on_plan.episodes) for n in names):
+        return True
+    first_plan = design.first_part(stage, condition, kind, args.budgets, args.rule_keep, **trial)
+    first = args.work / "first" / tag
+    waiting = [n for n in names if not trained(on / "runs" / n, args.budgets[0])]
+    if waiting:
+        log(args.work, f"{tag}: first {args.budgets[0]} episodes by the rule study's plan ({len(waiting)} runs)")
+        if not sweep(args.work, first, first_plan, args.workers, stop):
+            return False
+        from pursuit_bench.training.sweep import open_sweep
+
+        open_sweep(on, on_plan)  # the plan first: a sweep's folder holds its plan before its runs
+        (on / "runs").mkdir(parents=True, exist_ok=True)
+        for name in waiting:
+            if stage == "population" and not args.no_population_check:
+                population_check(args.work, condition, kind, first / "runs" / name, args.committed)
+            carry_on(first / "runs" / name, on, on_plan, name)
+    log(args.work, f"{tag}: on to {on_plan.episodes} episodes, checkpoints kept at {list(on_plan.keep_checkpoints)}")
+    return sweep(args.work, on, on_plan, args.workers, stop)
+
+
+def write_populations(args: Any, condition: str) -> None:
+    """Each budget's population of ``condition`` (FleeingPrey and the 8 learned prey at that
+    budget) under ``--populations/<name>/<condition>/``, in the population format."""
+    from pursuit_bench import pretrained
+    from pursuit_bench.io.files import atomic_write_text
+    from pursuit_bench.training import runs
+
+    for budget in args.budgets:
+        name = design.population_name(budget)
+        folder = args.populations / name / condition
+        if (folder / "population.json").exists():
+            continue
+        scratch = args.populations / name / f".{condition}.tmp"
+        if scratch.exists():
+            shutil.rmtree(scratch)
+        scratch.mkdir(parents=True)
+        entries = []
+        for member in design.members(condition):
+            files: dict[str, str] = {}
+            trained_as = None
+            if member["policy"] is None:
+                run = args.work / "on" / f"population-{member['kind']}-{condition}" / "runs"
+                run = run / design.run_name(condition, member["kind"], member["seed"])
+                checkpoint = runs.CHECKPOINT if budget == args.budgets[-1] else runs.milestone_checkpoint(budget)
+                config, agents, about = runs.described(run, checkpoint)
+                if about["trained_episodes"] != budget:
+                    raise SystemExit(f"{run}/{checkpoint}: {about['trained_episodes']} episodes, expected {budget}")
+                trained_as = {
+                    "preset": args.trial.get("preset", design.PRESET),
+                    "episodes": budget,
+                    "predator_kind": member["kind"],
+                    "build": args.build["commit"],
+                }
+                provenance = {"population": name, "member": member["name"], "build": args.build["commit"]}
+                written = pretrained.export(
+                    {"prey_0": agents["prey_0"]},
+                    config,
+                    scratch / ".export",
+                    trained_episodes=budget,
+                    provenance=provenance,
+                )[0]
+                (scratch / member["name"]).mkdir()
+                os.replace(written, scratch / member["name"] / "prey_0.safetensors")
+                files = {"prey_0": f"{member['name']}/prey_0.safetensors"}
+            entries.append({**member, "trained": trained_as, "files": files})
+        shutil.rmtree(scratch / ".export", ignore_errors=True)
+        document = {
+            "population": name,
+            "condition": condition,
+            "role": "prey",
+            "provisional": False,
+            "members": entries,
+        }
+        atomic_write_text(scratch / "population.json", json.dumps(document, indent=2) + "\n")
+        os.replace(scratch, folder)
+        log(args.work, f"population {name} of {condition} written to {folder}")
+
+
+def drive(args: Any) -> int:
+    """The study from where it stands: 0 once every run is trained, 143 when stopped."""
+    if args.skip_build_check:
+        args.build = {"commit": "test", "code": "test", "training_code": "test"}
+    else:
+        args.build = package_build()
+        check_build(args.work, args.build, json.loads((HERE / "build.json").read_text()))
+    (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
+    stop = [False]
+
+    def asked(signum: int, frame: Any) -> None:
+        if not stop[0]:
+            log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
+        stop[0] = True
+
+    signal.signal(signal.SIGTERM, asked)
+    signal.signal(signal.SIGINT, asked)
+    log(
+        args.work,
+        f"budget study: {', '.join(args.conditions)}; stages {', '.join(args.stages)}; budgets {list(args.budgets)}; "
+        f"commit {args.build['commit'][:10]}, code {args.build['code']}, pid {os.getpid()}",
+    )
+    for stage in args.stages:
+        for condition in args.conditions:
+            for kind in design.KINDS if stage == "population" else ("both",):
+                if stop[0] or not unit(args, stage, condition, kind, stop):
+                    log(args.work, "stopped: rerun the same command to resume")
+                    return 143
+            if stage == "population":
+                write_populations(args, condition)
+    log(args.work, "finished: every run trained")
+    return 0
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--work", type=Path, default=WORK, help="Run folders, progress.log, the lock.")
+    parser.add_argument("--populations", type=Path, default=None, help="Default: --work/populations.")
+    parser.add_argument("--conditions", default=",".join(design.CONDITIONS))
+    parser.add_argument("--stages", default=",".join(STAGES), help="population, judged or both, in that order.")
+    parser.add_argument("--budgets", default=None, help="(trying the driver only) e.g. 4,8,12")
+    parser.add_argument("--preset", default=None, help="(trying the driver only) e.g. quick")
+    parser.add_argument("--num-envs", type=int, default=None, help="(trying the driver only)")
+    parser.add_argument("--checkpoint-every", type=int, default=None, help="(trying the driver only)")
+    parser.add_argument("--committed", type=Path, default=None, help="(tests only) the rule-study populations' root")
+    parser.add_argument("--no-population-check", action="store_true", help="(trying the driver only)")
+    parser.add_argument("--skip-build-check", action="store_true", help="(tests only)")
+    args = parser.parse_args()
+    args.conditions = args.conditions.split(",")
+    if unknown := [c for c in args.conditions if c not in design.CONDITIONS]:
+        print(f"--conditions: unknown {unknown}; expected some of {', '.join(design.CONDITIONS)}", file=sys.stderr)
+        return 2
+    args.conditions = [c for c in design.CONDITIONS if c in args.conditions]
+    args.stages = args.stages.split(",")
+    if unknown := [s for s in args.stages if s not in STAGES]:
+        print(f"--stages: unknown {unknown}; expected some of {', '.join(STAGES)}", file=sys.stderr)
+        return 2
+    args.stages = [s for s in STAGES if s in args.stages]
+    if args.workers < 1:
+        print(f"--workers {args.workers}: expected at least 1", file=sys.stderr)
+        return 2
+    args.trial = {
+        k: v
+        for k, v in (("preset", args.preset), ("num_envs", args.num_envs), ("checkpoint_every", args.checkpoint_every))
+        if v is not None
+    }
+    args.rule_keep = design.RULE_KEEP
+    if args.budgets is None:
+        args.budgets = design.BUDGETS
+    else:
+        try:
+            args.budgets = tuple(int(b) for b in args.budgets.split(","))
+        except ValueError:
+            print(f"--budgets {args.budgets!r}: expected increasing integers, e.g. 4,8,12", file=sys.stderr)
+            return 2
+        if len(args.budgets) < 2 or any(b < 1 for b in args.budgets) or list(args.budgets) != sorted(set(args.budgets)):
+            print(f"--budgets {args.budgets}: expected at least two increasing integers >= 1", file=sys.stderr)
+            return 2
+        args.rule_keep = ()
+    trying = args.trial or args.budgets != design.BUDGETS or args.no_population_check
+    if trying and args.work == WORK:
+        print("trying the driver (--budgets, --preset …): give another --work than the study's", file=sys.stderr)
+        return 2
+    args.populations = args.populations or args.work / "populations"
+    args.work.mkdir(parents=True, exist_ok=True)
+    from pursuit_bench.io.files import RunBusy, locked
+
+    try:
+        with locked(args.work):  # one driver a study: a second refuses before it writes anything
+            return drive(args)
+    except RunBusy as error:
+        print(f"{error}: stop it first (kill -TERM its pid), or wait for it to finish", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,150 @@
+"""The budget study (issue 63, studies/budget/): its design as PROTOCOL.md states it, its build
+pin, and the one mechanism its runs rest on: a run's first part by the rule study's plan, carried
+on by the driver to a longer budget, equals the same run trained in one go, bit for bit."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+import torch
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDY = ROOT / "studies" / "budget"
+sys.path.insert(0, str(STUDY))
+
+import design  # noqa: E402
+import run as driver  # noqa: E402
+
+from pursuit_bench.study import rule_study  # noqa: E402
+from pursuit_bench.training import runs  # noqa: E402
+from pursuit_bench.training.stack import FolderRun, train_stack  # noqa: E402
+
+
+def test_the_design_is_the_protocol_s() -> None:
+    protocol = (STUDY / "PROTOCOL.md").read_text()
+    assert design.CONDITIONS == ("3p-low-shared", "2p-high-shared", "1p-high")
+    assert len(design.PANELS) == 6 and {c for c, _ in design.PANELS} == set(design.CONDITIONS)
+    assert design.KINDS == rule_study.KINDS == ("hierarchical", "flat")
+    assert design.BUDGETS == (15_000, 50_000, 150_000, 500_000, 1_000_000)
+    assert design.JUDGED_SEEDS == tuple(range(10))
+    assert (design.EVAL_EPISODES, design.EVAL_SEED) == (rule_study.EPISODES, rule_study.EVAL_SEED)
+    assert design.RULE_EPISODES == rule_study.BUDGETS[-1] and design.RULE_KEEP == rule_study.BUDGETS[:-1]
+    for condition in design.CONDITIONS:  # the rule study's population, member for member
+        assert design.members(condition) == rule_study.members(condition)
+        rule_study.check_design({k: list(design.JUDGED_SEEDS) for k in design.KINDS}, design.members(condition))
+    for needle in ("10^6", "Welch", "Holm", "±0.05", "seeds 0–9", "no seed is added", "crn-1", "80 core-hours"):
+        assert needle in protocol, needle
+    assert re.search(r"^Fixed on 2026-12-06", protocol, re.M)
+    for verdict in ("rule helps", "flat better", "equivalent", "not resolved"):
+        assert f"**{verdict}**" in protocol
+
+
+def test_the_plans_are_the_rule_study_s_but_for_length_and_kept_checkpoints() -> None:
+    for condition in design.CONDITIONS:
+        for kind in design.KINDS:
+            first = design.first_part("population", condition, kind)
+            assert first.episodes == 15_000 and first.keep_checkpoints == () and first.preset == "reproduction"
+            assert list(first.runs()) == [f"{condition}-{kind}-seed{s}" for s in rule_study.population_seeds(kind)]
+            on = design.continuation_plan("population", condition, kind)
+            assert on.episodes == 1_000_000 and on.keep_checkpoints == design.BUDGETS[:-1]
+            assert list(on.runs()) == list(first.runs())
+            for name, config in on.runs().items():  # nothing but the length differs, ε's and β's schedules included
+                assert config.to_dict() | {"episodes": 15_000, "agent": first.runs()[name].agent.to_dict()} == (
+                    first.runs()[name].to_dict()
+                )
+        judged = design.first_part("judged", condition, "hierarchical")
+        assert judged.predators == design.KINDS and judged.keep_checkpoints == rule_study.BUDGETS[:-1]
+        assert sorted(judged.runs()) == sorted(
+            f"{condition}-{k}-seed{s}" for k in design.KINDS for s in design.JUDGED_SEEDS
+        )
+    with pytest.raises(ValueError, match="stage='pool'"):
+        design.first_part("pool", "1p-high", "flat")
+    with pytest.raises(ValueError, match="condition='1p-low'"):
+        design.members("1p-low")
+
+
+def test_the_build_is_pinned() -> None:
+    pinned = json.loads((STUDY / "build.json").read_text())
+    assert pinned["commit"] == design.BUILD_COMMIT
+    known = subprocess.run(["git", "cat-file", "-e", pinned["commit"]], cwd=ROOT, capture_output=True)
+    if known.returncode != 0:
+        pytest.skip("the pinned commit is not in this clone")
+    listing = subprocess.run(
+        ["git", "ls-tree", "-r", pinned["commit"], "--", "pursuit_bench"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert design.fingerprints(listing) == {"code": pinned["code"], "training_code": pinned["training_code"]}
+    other = listing.replace(listing.split()[2], "0" * 40, 1)  # one file changed: both prints move
+    assert design.fingerprints(other)["code"] != pinned["code"]
+    with pytest.raises(SystemExit, match="not the study's build: code"):
+        driver.check_build(Path("/nonexistent"), {**pinned, "code": "0" * 16}, pinned)
+
+
+def train_folder(folder: Path, config, settings: dict, state: dict | None = None) -> None:
+    if state is None:
+        folder.mkdir(parents=True)
+        runs.write_config(folder, config, settings)
+    with runs.locked(folder):
+        train_stack([FolderRun(folder, config, settings, state)], record=False)
+
+
+def agents_of(path: Path) -> dict:
+    return torch.load(path, weights_only=True)["agents"]
+
+
+def same(a: object, b: object, where: str = "agents", but: str = "") -> None:
+    """Equal to the bit, all the way down (``but``: a path ending left out)."""
+    if but and where.endswith(but):
+        return
+    if isinstance(a, torch.Tensor):
+        assert isinstance(b, torch.Tensor) and torch.equal(a, b), where
+    elif isinstance(a, dict):
+        assert isinstance(b, dict) and set(a) == set(b), where
+        for key in a:
+            same(a[key], b[key], f"{where}/{key}", but)
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), where
+        for k, (x, y) in enumerate(zip(a, b, strict=True)):
+            same(x, y, f"{where}[{k}]", but)
+    else:
+        assert a == b, where
+
+
+def test_a_first_part_carried_on_equals_the_run_trained_in_one_go(tmp_path: Path) -> None:
+    """What the study's 10^6-episode runs rest on (PROTOCOL.md, "Runs"): a run trained to the
+    first budget by the rule study's plan, copied by the driver and trained on, equals the run
+    trained to the last budget in one go, weights, optimiser, replay and generators, and every
+    metrics row (ε and β included); its first budget's checkpoint is the one-go run's there."""
+    trial: dict[str, Any] = {"preset": "quick", "num_envs": 2, "checkpoint_every": 3}
+    budgets = (5, 9)
+    first_plan = design.first_part("population", "3p-low-shared", "flat", budgets, **trial)
+    on_plan = design.continuation_plan("population", "3p-low-shared", "flat", budgets, **trial)
+    name = "3p-low-shared-flat-seed1004"
+    settings = {"preset": "quick", "record_every": 100, "checkpoint_every": 3, "keep_checkpoints": []}
+    first = tmp_path / "first" / name
+    train_folder(first, first_plan.runs()[name], settings)
+    (tmp_path / "on" / "runs").mkdir(parents=True)
+    driver.carry_on(first, tmp_path / "on", on_plan, name)
+    carried = tmp_path / "on" / "runs" / name
+    config, carried_settings = runs.read_config(carried)
+    assert config == on_plan.runs()[name] and carried_settings["keep_checkpoints"] == [5]
+    train_folder(carried, config, carried_settings, runs.load_checkpoint(carried))
+    one_go = tmp_path / "one-go"
+    train_folder(one_go, on_plan.runs()[name], {**settings, "keep_checkpoints": [5]})
+    same(agents_of(carried / "checkpoint.pt"), agents_of(one_go / "checkpoint.pt"))
+    # the first part's end is the one-go run's at 5 episodes; only the training length it records differs
+    same(agents_of(carried / "checkpoint-ep5.pt"), agents_of(one_go / "checkpoint-ep5.pt"), but="config/episodes")
+    with pytest.raises(AssertionError, match="config/episodes"):
+        same(agents_of(carried / "checkpoint-ep5.pt"), agents_of(one_go / "checkpoint-ep5.pt"))
+    assert (carried / "metrics.jsonl").read_text() == (one_go / "metrics.jsonl").read_text()
+    with pytest.raises(SystemExit, match="not the plan's"):
+        driver.carry_on(first, tmp_path / "on", design.continuation_plan("population", "1p-high", "flat"), name)
