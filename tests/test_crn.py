@@ -105,3 +105,45 @@ def test_a_queued_start_is_the_start_its_seed_draws_and_is_used_once(obstacles: 
                 assert not np.array_equal(a[0], b[0])
         else:
             np.testing.assert_array_equal(a[0], b[0])
+
+
+def test_setups_evaluated_together_give_what_each_gives_alone() -> None:
+    """``evaluate_together`` (a study's members in one batch: parts of their own in the physics
+    and in torch's passes) returns ``evaluate_agents``' result for every setup."""
+    from pursuit_bench.rules.policies import FleeingPrey
+    from pursuit_bench.training.evaluate import evaluate_together
+
+    agents = pretrained.load("2p-low-shared")
+    fleeing = {**agents, "prey_0": ScriptedAgent("prey_0", FleeingPrey())}
+    setups = [(agents, 0.1), (fleeing, None), (agents, None)]
+    together = evaluate_together("2p-low-shared", setups, episodes=6, seed=3, num_envs=4, prey_check=False)
+    for (actors, eps), batched in zip(setups, together, strict=True):
+        alone = evaluate_agents(
+            "2p-low-shared", actors, episodes=6, seed=3, num_envs=4, prey_epsilon=eps, prey_check=False
+        )
+        # numpy's hypot may round the last bit differently in arrays of other lengths (SIMD)
+        far, near = alone.pop("distance_travelled"), batched.pop("distance_travelled")
+        assert far == pytest.approx(near, rel=1e-12)
+        assert batched == alone
+    assert together[0]["panels"] != together[1]["panels"]  # the setups differ: the test can fail
+
+
+def test_torch_passes_are_made_per_part() -> None:
+    """Rows labelled as parts get, where torch's pass decides, the Q-values each part gets alone."""
+    from pursuit_bench.agents import dqn
+
+    learner = pretrained.load("2p-low-shared")["predator_0"].learner  # type: ignore[attr-defined]
+    rng = np.random.default_rng(0)
+    obs = rng.normal(0, 0.5, (90, learner.n_obs)).astype(np.float32)
+    parts = np.repeat([0, 1, 2], [20, 45, 25])
+    gap = dqn.DECISIVE_GAP
+    try:
+        dqn.DECISIVE_GAP = 1e9  # every row undecided: every part goes to torch
+        per_part = np.concatenate([learner.decisive_q(obs[parts == p], 0) for p in range(3)])
+        np.testing.assert_array_equal(learner.decisive_q(obs, 0, parts), per_part)
+        torch_q = learner._torch_q(obs[parts == 1], 0)
+        np.testing.assert_array_equal(per_part[parts == 1], torch_q)
+    finally:
+        dqn.DECISIVE_GAP = gap
+    with_parts = learner.decisive_q(obs, 0, parts)  # decided rows: the compiled pass, as without parts
+    np.testing.assert_array_equal(with_parts.argmax(-1), learner.decisive_q(obs, 0).argmax(-1))

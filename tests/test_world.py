@@ -146,7 +146,14 @@ def test_captures_are_the_contacts_pymunk_reports(wall_rule: str, n_agents: int)
     arenas = 120
     world = make_world("pymunk", arenas, n_agents, wall_rule=wall_rule)
     assert world.__class__.__name__ == "PymunkWorld"
-    disks = [s for s in world.space.shapes if isinstance(s, pymunk.Circle) and s.body.body_type == pymunk.Body.DYNAMIC]  # type: ignore[attr-defined]
+    space = world.space  # type: ignore[attr-defined]
+    disks = [s for s in space.shapes if isinstance(s, pymunk.Circle) and s.body.body_type == pymunk.Body.DYNAMIC]
+    if not disks:  # with nothing to touch the world's disks are bodies alone: the reference gives them shapes
+        for body in space.bodies:
+            disks.append(pymunk.Circle(body, RADIUS))
+            disks[-1].filter = pymunk.ShapeFilter(group=1)
+            space.add(disks[-1])
+    assert len(disks) == arenas * n_agents
     reported = np.zeros((arenas, n_agents - 1), dtype=bool)
     for k, disk in enumerate(disks):
         arena, agent = divmod(k, n_agents)
@@ -159,7 +166,7 @@ def test_captures_are_the_contacts_pymunk_reports(wall_rule: str, n_agents: int)
             reported[data] = True
             arbiter.process_collision = False  # reported, never solved: the bodies move as without it
 
-        world.space.on_collision(100 + k, 2, pre_solve=pre_solve, data=(arena, agent))  # type: ignore[attr-defined]
+        space.on_collision(100 + k, 2, pre_solve=pre_solve, data=(arena, agent))
     rng = np.random.default_rng(5)
     compared = captures = 0
     for step in range(600):
@@ -174,3 +181,46 @@ def test_captures_are_the_contacts_pymunk_reports(wall_rule: str, n_agents: int)
         compared += int(untouched.sum())
         captures += int(reported[untouched].sum())
     assert compared > 30_000 and captures > 3_000
+
+
+@pytest.mark.parametrize(("wall_rule", "obstacles"), [("terminate", 0), ("contain", 0), ("terminate", 3)])
+def test_an_arena_in_a_block_moves_as_in_a_world_of_its_block_alone(wall_rule: str, obstacles: int) -> None:
+    """Blocks of arenas lie one on another, each laid out as its own world would lay it out: the
+    same absolute coordinates, so the same bits, and no block touches another's walls or
+    obstacles (a block's obstacles in another block's way would change where its disks go)."""
+    sizes = [5, 12, 7]
+    together = make_world("pymunk", sum(sizes), 3, wall_rule=wall_rule, obstacles=obstacles, blocks=sizes)
+    alone = [make_world("pymunk", size, 3, wall_rule=wall_rule, obstacles=obstacles) for size in sizes]
+    rng = np.random.default_rng(2)
+    moved = 0.0
+    for step in range(400):
+        if step % 100 == 0:
+            positions = rng.uniform(-0.9, 0.9, (sum(sizes), 3, 2))
+            around = None
+            if obstacles:  # blocks' obstacles at different places: overlapping blocks would collide
+                around = np.concatenate(
+                    [rng.uniform(-0.8, 0.8, (sum(sizes), obstacles, 2)), np.full((sum(sizes), obstacles, 1), 0.12)],
+                    axis=-1,
+                )
+            together.reset(np.arange(sum(sizes)), positions, around)
+            for k, world in enumerate(alone):
+                rows = slice(sum(sizes[:k]), sum(sizes[: k + 1]))
+                world.reset(np.arange(sizes[k]), positions[rows], None if around is None else around[rows])
+        pushes = rng.uniform(-4.0, 4.0, (sum(sizes), 3, 2))
+        contacts = together.step(pushes)
+        at = 0
+        for size, world in zip(sizes, alone, strict=True):
+            theirs = world.step(pushes[at : at + size])
+            np.testing.assert_array_equal(together.positions[at : at + size], world.positions)
+            np.testing.assert_array_equal(together.velocities[at : at + size], world.velocities)
+            np.testing.assert_array_equal(contacts.obstacle[at : at + size], theirs.obstacle)
+            at += size
+        moved += float(np.abs(together.velocities).sum())
+    assert moved > 0
+
+
+def test_blocks_that_do_not_add_up_are_refused() -> None:
+    with pytest.raises(ValueError, match="adding up to 10"):
+        make_world("pymunk", 10, 2, blocks=[4, 5])
+    with pytest.raises(ValueError, match="at most 32"):
+        make_world("pymunk", 33, 2, wall_rule="contain", blocks=[1] * 33)

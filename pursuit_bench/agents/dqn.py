@@ -143,12 +143,15 @@ class DQNLearner:
             q, value = self.online.q_and_value(self.encode(obs))
         return q.numpy(), value.numpy()
 
-    def decisive_q(self, obs: np.ndarray, member: int) -> np.ndarray:
+    def decisive_q(self, obs: np.ndarray, member: int, parts: np.ndarray | None = None) -> np.ndarray:
         """Member ``member``'s Q-values (B, A) for observations (B, n_obs), fast, with every row's
         argmax that of :meth:`evaluate` (torch's network, which the committed evaluations used):
         the compiled forward pass, and torch's for the whole batch where some row's two best
         actions lie closer than the two passes can differ (:data:`DECISIVE_GAP`, relative to the
-        row's :func:`decision_scale`)."""
+        row's :func:`decision_scale`). ``parts`` (B,) labels runs of consecutive rows as batches
+        of their own: torch's pass, whose result for a row may depend on the rows beside it, is
+        then made per run that holds such a row, on that run's rows alone (so rows batched
+        together here choose as they would have in batches of their own)."""
         if not 0 <= member < self.members:
             raise ValueError(f"member={member!r}: expected one of 0 … {self.members - 1}")
         obs = np.asarray(obs, dtype=np.float32)
@@ -162,11 +165,23 @@ class DQNLearner:
         if self.n_actions == 1:
             return q  # nothing to decide
         top = np.sort(q, axis=-1)[:, -2:]
-        if np.any(top[:, 1] - top[:, 0] <= DECISIVE_GAP * decision_scale(q, value)):
-            everyone = np.zeros((self.members, *obs.shape), dtype=np.float32)
-            everyone[member] = obs
-            return self.evaluate(everyone)[0][member]
+        close = top[:, 1] - top[:, 0] <= DECISIVE_GAP * decision_scale(q, value)
+        if not close.any():
+            return q
+        if parts is None:
+            return self._torch_q(obs, member)
+        q = q.copy()
+        starts = np.flatnonzero(np.r_[True, parts[1:] != parts[:-1]])
+        for start, end in zip(starts.tolist(), [*starts[1:].tolist(), len(obs)], strict=True):
+            if close[start:end].any():
+                q[start:end] = self._torch_q(obs[start:end], member)
         return q
+
+    def _torch_q(self, obs: np.ndarray, member: int) -> np.ndarray:
+        """Member ``member``'s Q-values (B, A) by torch's network, the other members given zeros."""
+        everyone = np.zeros((self.members, *obs.shape), dtype=np.float32)
+        everyone[member] = obs
+        return self.evaluate(everyone)[0][member]
 
     def _checked(self, obs: np.ndarray, what: str) -> np.ndarray:
         """``obs`` (M, B, n_obs) for the compiled passes, which read parameters by offset and

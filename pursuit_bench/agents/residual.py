@@ -238,10 +238,15 @@ class ResidualLearner(DQNLearner):
         mode_q, value = super().act_values(obs)
         return self._with_corrections(mode_q, np.asarray(obs), compiled=True), value
 
-    def decisive_q(self, obs: np.ndarray, member: int) -> np.ndarray:
+    def decisive_q(self, obs: np.ndarray, member: int, parts: np.ndarray | None = None) -> np.ndarray:
         """Member ``member``'s Q-values (B, 10), the mode values from the compiled pass, and
         torch's for the whole batch where some row's two best actions lie within
-        :data:`DECISIVE_GAP` (C is torch's in both)."""
+        :data:`DECISIVE_GAP` (C is torch's in both). ``parts`` (B,) labels runs of rows as
+        batches of their own (torch's passes are made per run: see the base class)."""
+        if parts is not None and len(parts) and np.any(parts[1:] != parts[:-1]):
+            starts = np.flatnonzero(np.r_[True, parts[1:] != parts[:-1]]).tolist()
+            ends = [*starts[1:], len(obs)]
+            return np.concatenate([self.decisive_q(obs[a:b], member) for a, b in zip(starts, ends, strict=True)])
         if not 0 <= member < self.members:
             raise ValueError(f"member={member!r}: expected one of 0 … {self.members - 1}")
         obs = np.asarray(obs, dtype=np.float32)

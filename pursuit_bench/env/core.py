@@ -44,13 +44,15 @@ class StepResult:
 class PursuitCore:
     """B arenas of one task. ``reset`` some arenas, ``step`` all of them."""
 
-    def __init__(self, config: TaskConfig, num_arenas: int = 1, *, backend: Backend = "pymunk") -> None:
+    def __init__(
+        self, config: TaskConfig, num_arenas: int = 1, *, backend: Backend = "pymunk", blocks: list[int] | None = None
+    ) -> None:
         if isinstance(num_arenas, bool) or not isinstance(num_arenas, int) or num_arenas < 1:
             raise ValueError(f"num_envs={num_arenas!r}: expected an integer >= 1")
         self.config = config
         self.num_arenas = num_arenas
         self.world = make_world(
-            backend, num_arenas, config.n_agents, wall_rule=config.wall_rule, obstacles=config.obstacles
+            backend, num_arenas, config.n_agents, wall_rule=config.wall_rule, obstacles=config.obstacles, blocks=blocks
         )
         self.steps = np.zeros(num_arenas, dtype=np.int64)
         # the dynamics factors (robustness tests), fixed by the config: None where unchanged

@@ -56,6 +56,9 @@ class VectorPursuitEnv:
         num_envs: number of arenas B.
         condition: one of :data:`pursuit_bench.CONDITIONS`, or None to give the options.
         backend: ``"pymunk"`` (the reference, default) or ``"numpy"``.
+        blocks: sizes of consecutive runs of arenas, each laid out in the physics as an env of
+            that many arenas alone lays them out (an arena's play then gives the bits it gives
+            there; an evaluation batching what used to be separate envs uses it). Default: one.
         **options: ``n_predators``, ``chase_cost``, ``reward_sharing``, ``max_steps``, ``wall_rule``,
             ``continuous``, ``obstacles``, ``obstacle_radius``.
 
@@ -85,11 +88,19 @@ class VectorPursuitEnv:
     arena resets on the same step (above).
     """
 
-    def __init__(self, num_envs: int, condition: str | None = None, *, backend: Backend = "pymunk", **options: Any):
+    def __init__(
+        self,
+        num_envs: int,
+        condition: str | None = None,
+        *,
+        backend: Backend = "pymunk",
+        blocks: list[int] | None = None,
+        **options: Any,
+    ):
         self.config: TaskConfig = resolve_condition(condition, **options)
         self.condition = condition
         self.num_envs = num_envs
-        self.core = PursuitCore(self.config, num_envs, backend=backend)
+        self.core = PursuitCore(self.config, num_envs, backend=backend, blocks=blocks)
         self.agents = list(self.config.agent_names)
         self.n_agents = self.config.n_agents
         self.obs_size = task.obs_size(self.n_agents, self.config.obstacles > 0)

@@ -298,11 +298,13 @@ class NumpyWorld:
         wall_rule: WallRule = "terminate",
         half_size: float = HALF_SIZE,
         obstacles: int = 0,
+        blocks: list[int] | None = None,
     ) -> None:
         self.num_arenas = num_arenas
         self.n_agents = n_agents
         self.wall_rule = wall_rule
         self.limit = half_size - RADIUS
+        check_blocks(blocks, num_arenas, static=False)  # no absolute coordinates: the sizes are all
         self.positions = np.zeros((num_arenas, n_agents, 2))
         self.velocities = np.zeros((num_arenas, n_agents, 2))
         self.obstacles = np.zeros((num_arenas, obstacles, 3))
@@ -361,11 +363,14 @@ class PymunkWorld:
         wall_rule: WallRule = "terminate",
         half_size: float = HALF_SIZE,
         obstacles: int = 0,
+        blocks: list[int] | None = None,
     ) -> None:
         self.num_arenas = num_arenas
         self.n_agents = n_agents
         self.wall_rule = wall_rule
         self.limit = half_size - RADIUS
+        static = wall_rule == "contain" or obstacles > 0
+        sizes = check_blocks(blocks, num_arenas, static=static)
 
         space = pymunk.Space()
         space.damping = 1.0  # damping is applied in integrate_velocity, not by pymunk
@@ -374,23 +379,34 @@ class PymunkWorld:
         # would correct the same overlap twice and bounce the disk off the wall.
         space.collision_bias = 1.0
         self.space = space
-        columns = int(np.ceil(np.sqrt(num_arenas)))
+        # each block of arenas laid out as a world of its own would lay it out, the blocks one on
+        # top of another: an arena's absolute coordinates, and so the bits of its physics, are those
+        # it has in a world of its block alone; a block's walls and obstacles touch its own disks only
         spacing = 2 * (half_size + WALL_THICKNESS)
-        self.offsets = np.array(
-            [[(i % columns) * spacing, (i // columns) * spacing] for i in range(num_arenas)],
-            dtype=np.float64,
-        )
-        disks = pymunk.ShapeFilter(group=1)  # disks never collide with disks in pymunk
-        for ox, oy in self.offsets:
+        grids = []
+        for size in sizes:
+            columns = int(np.ceil(np.sqrt(size)))
+            grids += [[(i % columns) * spacing, (i // columns) * spacing] for i in range(size)]
+        self.offsets = np.array(grids, dtype=np.float64)
+        block = np.repeat(np.arange(len(sizes)), sizes)
+        separate = static and len(sizes) > 1  # without walls or obstacles nothing could touch
+        own = [pymunk.ShapeFilter(categories=1 << b, mask=1 << b) for b in range(len(sizes))] if separate else []
+        disks = [pymunk.ShapeFilter(group=1, categories=f.categories, mask=f.mask) for f in own]
+        self._static_filters = [own[b] for b in block] if own else []
+        for arena, (ox, oy) in enumerate(self.offsets):
             if wall_rule == "contain":  # under "terminate" a wall has no effect: none is made
-                self._add_walls(ox, oy, half_size)
+                self._add_walls(ox, oy, half_size, arena)
             for _ in range(n_agents):
                 body = pymunk.Body(MASS, float("inf"))  # disks never rotate
                 body.position = (ox, oy)
+                if not static:  # nothing to touch: a body alone (pymunk moves it as it would a disk)
+                    space.add(body)
+                    continue
                 disk = pymunk.Circle(body, RADIUS)
                 disk.friction = 0.0
                 disk.elasticity = 0.0
-                disk.filter = disks
+                # disks never collide with disks in pymunk (one group)
+                disk.filter = disks[block[arena]] if disks else pymunk.ShapeFilter(group=1)
                 space.add(body, disk)
         self.obstacles = np.zeros((num_arenas, obstacles, 3))
         if obstacles:
@@ -399,14 +415,17 @@ class PymunkWorld:
             # and the velocity then differs from a fresh solve (measured: 1e-4 within 12 steps).
             space.collision_persistence = 0
         self._obstacle_shapes: list[list[pymunk.Circle]] = []
-        for ox, oy in self.offsets:
+        for arena, (ox, oy) in enumerate(self.offsets):
             shapes = [pymunk.Circle(space.static_body, 0.0, (ox, oy)) for _ in range(obstacles)]
             for shape in shapes:
                 shape.friction = 0.0
                 shape.elasticity = 0.0
+                if self._static_filters:
+                    shape.filter = self._static_filters[arena]
                 space.add(shape)
             self._obstacle_shapes.append(shapes)
-        space.use_spatial_hash(HASH_CELL, HASH_BUCKETS_PER_SHAPE * len(space.shapes))
+        if space.shapes:
+            space.use_spatial_hash(HASH_CELL, HASH_BUCKETS_PER_SHAPE * len(space.shapes))
 
         self._offsets_per_body = np.repeat(self.offsets, n_agents, axis=0)
         self._offset = bool(self.offsets.any())  # a single arena sits at the origin
@@ -425,7 +444,7 @@ class PymunkWorld:
         self.positions = np.zeros((num_arenas, n_agents, 2))
         self.velocities = np.zeros((num_arenas, n_agents, 2))
 
-    def _add_walls(self, ox: float, oy: float, half_size: float) -> None:
+    def _add_walls(self, ox: float, oy: float, half_size: float, arena: int) -> None:
         t = WALL_THICKNESS / 2  # segment radius: the inner face is at ±half_size
         c = half_size + t
         corners = [(-c, -c), (c, -c), (c, c), (-c, c)]
@@ -433,6 +452,8 @@ class PymunkWorld:
             wall = pymunk.Segment(self.space.static_body, (ox + ax, oy + ay), (ox + bx, oy + by), t)
             wall.friction = 0.0
             wall.elasticity = 0.0
+            if self._static_filters:
+                wall.filter = self._static_filters[arena]
             self.space.add(wall)
 
     def _bodies_state(self) -> np.ndarray:
@@ -519,6 +540,23 @@ class PymunkWorld:
         return Contacts(wall=wall, prey=prey, obstacle=obstacle)
 
 
+#: The most blocks of arenas a pymunk world holds where there are walls or obstacles to keep
+#: apart (one shape-filter category each; chipmunk's bitmasks have 32 bits).
+MAX_BLOCKS = 32
+
+
+def check_blocks(blocks: list[int] | None, num_arenas: int, *, static: bool) -> list[int]:
+    """The block sizes (``[num_arenas]`` by default), checked: positive, summing to
+    ``num_arenas``, at most :data:`MAX_BLOCKS` where blocks must not touch each other's
+    walls or obstacles (``static``)."""
+    sizes = [num_arenas] if blocks is None else [int(b) for b in blocks]
+    if any(b < 1 for b in sizes) or sum(sizes) != num_arenas:
+        raise ValueError(f"blocks={blocks!r}: expected positive sizes adding up to {num_arenas} arenas")
+    if static and len(sizes) > MAX_BLOCKS:
+        raise ValueError(f"blocks: {len(sizes)} blocks with walls or obstacles; at most {MAX_BLOCKS}")
+    return sizes
+
+
 def make_world(
     backend: Backend,
     num_arenas: int,
@@ -527,11 +565,19 @@ def make_world(
     wall_rule: WallRule = "terminate",
     half_size: float = HALF_SIZE,
     obstacles: int = 0,
+    blocks: list[int] | None = None,
 ) -> World:
     """Build a world of the named backend (``"pymunk"``, the reference, or ``"numpy"``) with
-    room for ``obstacles`` obstacles per arena."""
+    room for ``obstacles`` obstacles per arena. ``blocks``: sizes of consecutive runs of arenas
+    each placed as a world of that many arenas alone would place them, so that an arena's
+    physics gives the bits it gives there (pymunk keeps absolute coordinates; the numpy
+    backend's arenas have none, and it only checks the sizes)."""
     if backend == "pymunk":
-        return PymunkWorld(num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size, obstacles=obstacles)
+        return PymunkWorld(
+            num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size, obstacles=obstacles, blocks=blocks
+        )
     if backend == "numpy":
-        return NumpyWorld(num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size, obstacles=obstacles)
+        return NumpyWorld(
+            num_arenas, n_agents, wall_rule=wall_rule, half_size=half_size, obstacles=obstacles, blocks=blocks
+        )
     raise ValueError(f"backend={backend!r}: expected 'pymunk' or 'numpy'")

@@ -23,6 +23,9 @@ from pursuit_bench.rules.navigation import SAFETY_DISTANCE, around_obstacles, na
 
 class _FixedModePredator:
     mode: int
+    #: ``act_batch``'s row i depends on observation i alone (no state, no draws): copies that
+    #: hold the same settings may act for all their rows in one call (an evaluation's batch).
+    row_wise = True
 
     def __init__(self, *, avoidance: bool = False) -> None:
         self.avoidance = avoidance
@@ -70,6 +73,8 @@ class FleeingPrey:
     predicted position, minus a penalty for coming within ``wall_margin`` of a wall. With
     ``obstacles`` (its observations end with range readings) also minus the same weight times
     how far a direction's reading falls short of the avoidance rule's safety distance."""
+
+    row_wise = True  # as the predators' (above)
 
     def __init__(self, wall_margin: float = 0.25, wall_weight: float = 10.0, *, obstacles: bool = False) -> None:
         self.wall_margin = wall_margin

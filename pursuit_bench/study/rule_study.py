@@ -168,29 +168,30 @@ def evaluate_run(
     from pursuit_bench.agents.kinds import ScriptedAgent
     from pursuit_bench.rules.policies import FleeingPrey
     from pursuit_bench.training import runs
-    from pursuit_bench.training.evaluate import PROTOCOL, evaluate_agents
+    from pursuit_bench.training.evaluate import PROTOCOL, evaluate_together
 
     opponents = read_population(population)
     out: dict[str, Any] = {}
     for budget in budgets:
         checkpoint = runs.CHECKPOINT if budget == budgets[-1] else runs.milestone_checkpoint(budget)
         config, agents, _ = runs.described(folder, checkpoint)
-        evaluations = {}
-        for member in opponents:
-            protocol = dict(config.protocol)
+        protocol = dict(config.protocol)
+        learned_epsilon = protocol.pop("prey_epsilon")
+        predators = {k: v for k, v in agents.items() if k != "prey_0"}
+        setups: list[tuple[dict[str, Any], float | None]] = []
+        for member in opponents:  # every member at this budget in one batch of arenas
             if member["policy"] == FLEEING:
-                prey: Any = ScriptedAgent("prey_0", FleeingPrey(obstacles=bool(config.task_options.get("obstacles"))))
-                protocol["prey_epsilon"] = None
+                fleeing = FleeingPrey(obstacles=bool(config.task_options.get("obstacles")))
+                setups.append(({**predators, "prey_0": ScriptedAgent("prey_0", fleeing)}, None))
             else:
-                prey = load_member(population / member["files"]["prey_0"])
-            result = evaluate_agents(
-                config.condition,
-                {**{k: v for k, v in agents.items() if k != "prey_0"}, "prey_0": prey},
-                episodes=episodes,
-                seed=seed,
-                prey_check=False,
-                **protocol,
-            )
+                setups.append(
+                    ({**predators, "prey_0": load_member(population / member["files"]["prey_0"])}, learned_epsilon)
+                )
+        results = evaluate_together(
+            config.condition, setups, episodes=episodes, seed=seed, prey_check=False, **protocol
+        )
+        evaluations = {}
+        for member, result in zip(opponents, results, strict=True):
             evaluations[member["name"]] = {
                 "panels": {
                     p["predator"]: [p["trained"], p["always_chase"], p["always_stalk"]] for p in result["panels"]

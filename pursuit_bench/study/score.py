@@ -421,25 +421,36 @@ def _epsilons(agents: dict[str, Any]) -> dict[str, float]:
 
 def play(
     condition: str,
-    contestant: Contestant,
-    member: populations.Member,
+    pairs: list[tuple[Contestant, populations.Member]],
     episodes: int,
     seed: int,
     num_envs: int,
-    on_episodes: Callable[[int], None] = lambda n: None,
-) -> np.ndarray:
-    """The contestant's returns (episodes × its slots) against one member, on the episodes ``seed`` fixes."""
-    role = contestant.role
-    other = "prey" if role == "predator" else "predator"
-    agents = {**member.agents(condition, slots(condition, other)), **contestant.make(condition, seed)}
-    agents = {name: agents[name] for name in CONDITIONS[condition].agent_names}
-
+) -> list[np.ndarray]:
+    """Each contestant's returns (episodes × its slots) against its member, on the episodes
+    ``seed`` fixes: every pair in one batch of arenas (the same returns as each played alone)."""
+    variants, slots_of = [], []
+    # learned agents act greedily or on the protocol's own draws (no state): made once and shared,
+    # so a network's rows are one forward pass; scripted ones (some draw from generators of their
+    # own) are made afresh for every pair, as if it were played alone
+    made: dict[int, dict[str, Any]] = {}
+    met: dict[str, dict[str, Any]] = {}
+    for contestant, member in pairs:
+        role = contestant.role
+        other = "prey" if role == "predator" else "predator"
+        mine = made.get(id(contestant)) or contestant.make(condition, seed)
+        theirs = met.get(member.name) or member.agents(condition, slots(condition, other))
+        if all(isinstance(a, LearningAgent) for a in mine.values()):
+            made[id(contestant)] = mine
+        if all(isinstance(a, LearningAgent) for a in theirs.values()):
+            met[member.name] = theirs
+        agents = {**theirs, **mine}
+        agents = {name: agents[name] for name in CONDITIONS[condition].agent_names}
+        variants.append((agents, _epsilons(agents)))
+        slots_of.append([list(agents).index(name) for name in slots(condition, role)])
     # the evaluation protocol's own player: every episode played to its end, the learned opponents'
     # exploration drawn by (seed, episode, agent), so every contestant meets the same opponent noise
-    (played,) = play_variants(condition, [(agents, _epsilons(agents))], episodes, seed=seed, num_envs=num_envs)
-    on_episodes(episodes)
-    index = [list(agents).index(name) for name in slots(condition, role)]
-    return np.asarray(played.returns[:, index], dtype=float)
+    played = play_variants(condition, variants, episodes, seed=seed, num_envs=num_envs, parts=list(range(len(pairs))))
+    return [np.asarray(p.returns[:, index], dtype=float) for p, index in zip(played, slots_of, strict=True)]
 
 
 def excluded_members(contestant: Contestant, population: populations.Population) -> dict[str, str]:
@@ -485,14 +496,14 @@ def score(
         pop = pop.without(set(excluded))
         if not pop.members:
             raise ValueError(f"{condition}: every member of population {name} comes from the scored run")
-        returns: dict[str, np.ndarray] = {}  # contestant -> (members, episodes, slots)
-        for key, who in {"agent": contestant, **refs}.items():
-            if key != "agent" and key == contestant.label:  # the agent is this reference: the same plays
-                returns[key] = returns["agent"]
-                continue
-            returns[key] = np.stack(
-                [play(condition, who, m, episodes, seed, min(num_envs, episodes), on_episodes) for m in pop.members]
-            )
+        # every contestant against every member, in one batch (the agent is a reference: the same plays)
+        everyone = {"agent": contestant, **refs}
+        playing = {key: who for key, who in everyone.items() if key == "agent" or key != contestant.label}
+        pairs = [(who, m) for who in playing.values() for m in pop.members]
+        played = iter(play(condition, pairs, episodes, seed, min(num_envs, episodes)))
+        by_key = {key: np.stack([next(played) for _ in pop.members]) for key in playing}
+        returns = {key: by_key.get(key, by_key["agent"]) for key in everyone}  # (members, episodes, slots)
+        on_episodes(episodes * len(pairs))
         averaged = {key: r.mean(axis=2) for key, r in returns.items()}
         agent = crossed_interval(averaged["agent"])
         random, shipped = float(averaged["random"].mean()), float(averaged[SHIPPED].mean())

@@ -6,6 +6,7 @@ evaluation written beside it (:func:`evaluate_folder`, :func:`evaluate_into`).""
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from collections.abc import Callable, Mapping
@@ -19,7 +20,7 @@ from pursuit_bench.agents.kinds import HierarchicalPredator, LearningAgent, Scri
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.perturbations import Perturbations, PerturbedEnv
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
-from pursuit_bench.env.world import Backend
+from pursuit_bench.env.world import MAX_BLOCKS, Backend
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.training import runs
@@ -219,6 +220,7 @@ def play_variants(
     recorder: Recorder | None = None,
     check: Callable[[], None] = lambda: None,
     task_options: Mapping[str, Any] | None = None,
+    parts: list[int] | None = None,
 ) -> list[Episodes]:
     """Play episodes ``0 … episodes-1`` of every variant (the actors of each agent; a learning
     agent named in the ε dict acts ε-greedily) in one batch of ``min(num_envs, episodes)``
@@ -229,14 +231,35 @@ def play_variants(
     played beside it. An arena that ends an episode starts the variant's next unplayed one; all
     are played to their end (none is dropped for being long). Results come per variant in
     episode order. A ``recorder`` (one variant only) receives every episode, numbered from 1,
-    with the hierarchical predators' Q-values and V(s); ``check()`` is called before every step."""
+    with the hierarchical predators' Q-values and V(s); ``check()`` is called before every step.
+
+    ``parts`` (one label per variant, in non-decreasing order; by default all one part) says
+    which variants used to be played in calls of their own: a network's forward pass covers all
+    its rows at once, and where it falls back on torch's pass (:meth:`DQNLearner.decisive_q`) it
+    makes it per part, so every variant plays exactly as it did in its own call."""
     if recorder is not None and len(variants) != 1:
         raise ValueError(f"a recorder records one variant, got {len(variants)}")
+    labels = np.zeros(len(variants), dtype=np.int64) if parts is None else np.asarray(parts, dtype=np.int64)
+    if labels.shape != (len(variants),) or np.any(np.diff(labels) < 0):
+        raise ValueError(f"parts={parts!r}: expected one label per variant, in non-decreasing order")
+    options = dict(task_options or {})
+    static = options.get("wall_rule", CONDITIONS[condition].wall_rule) == "contain" or bool(options.get("obstacles"))
+    if static and len(np.unique(labels)) > MAX_BLOCKS:  # one world keeps that many parts' walls apart
+        begins = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])
+        cut = int(begins[MAX_BLOCKS])
+        play = functools.partial(
+            play_variants, condition, episodes=episodes, seed=seed, num_envs=num_envs, backend=backend,
+            check=check, task_options=task_options,
+        )  # fmt: skip
+        return play(variants[:cut], parts=labels[:cut].tolist()) + play(variants[cut:], parts=labels[cut:].tolist())
     arenas = min(num_envs, episodes)
     n, count = len(variants) * arenas, len(variants)
-    env = VectorPursuitEnv(n, condition, backend=backend, **dict(task_options or {}))
+    # each part's arenas laid out in the physics as the part's own env would lay them out
+    blocks = (np.bincount(labels)[np.unique(labels)] * arenas).tolist()
+    env = VectorPursuitEnv(n, condition, backend=backend, blocks=blocks, **options)
     names, n_pred, steps = env.agents, env.n_agents - 1, env.config.max_steps
     variant = np.arange(n) // arenas
+    part = labels[variant]  # each row's part: rows of one actor lie in variant order, so parts run in blocks
     playing = np.arange(n) % arenas  # each arena's episode now (``episodes`` or more: idle)
     following = playing + arenas  # the episode it starts next (reserved: its start is set ahead)
     handed = np.full(count, 2 * arenas)  # per variant, the next episode not yet reserved
@@ -253,14 +276,14 @@ def play_variants(
             env.queue_starts(rows, starts[ahead], placed[ahead] if env.config.obstacles else None)
 
     queue(np.arange(n))
-    # per agent: rows grouped by actor (one forward pass each), and each row's ε (0: greedy)
+    # per agent: rows grouped by actor (one forward pass or call each), and each row's ε (0: greedy)
     groups: list[list[tuple[Actor, np.ndarray]]] = []
     eps = np.zeros((n, env.n_agents))
     for i, name in enumerate(names):
-        by_actor: dict[int, tuple[Actor, list[np.ndarray]]] = {}
+        by_actor: dict[Any, tuple[Actor, list[np.ndarray]]] = {}
         for v, (actors, epsilons) in enumerate(variants):
             rows = np.flatnonzero(variant == v)
-            by_actor.setdefault(id(actors[name]), (actors[name], []))[1].append(rows)
+            by_actor.setdefault(_batch_key(actors[name]), (actors[name], []))[1].append(rows)
             if isinstance(actors[name], LearningAgent) and name in epsilons:
                 eps[rows, i] = epsilons[name]
         groups.append([(actor, np.concatenate(rows)) for actor, rows in by_actor.values()])
@@ -313,7 +336,7 @@ def play_variants(
                     continue
                 seen = obs[rows, i]
                 if isinstance(actor, LearningAgent):
-                    choices = actor.learner.decisive_q(seen, actor.member).argmax(axis=-1)
+                    choices = actor.learner.decisive_q(seen, actor.member, part[rows]).argmax(axis=-1)
                     if i in exploring:
                         at = step[rows]
                         random = draws[i][0][rows, at] < eps[rows, i]
@@ -339,31 +362,46 @@ def play_variants(
         if traces is not None:
             traces.add_step(actions, rewards, info, q_values, values)
         ended = np.flatnonzero(info["done"])
-        for row in ended:  # in arena order: which arena plays which episode is fixed by the seed
-            v, e = int(variant[row]), int(playing[row])
-            if e < episodes:
-                length = int(info["episode_length"][row])
-                out["returns"][v, e] = info["episode_return"][row]
-                out["lengths"][v, e] = length
-                out["captured"][v, e] = bool(info["captured"][row])
-                out["chase_fraction"][v, e] = chase[row] / length
-                out["distance"][v, e] = travelled[row]
-                out["left_area"][v, e] = info["left_area"][row]
-                out["collisions"][v, e] = collisions[row]
-                out["contact_steps"][v, e] = contact[row]
-            if traces is not None and recorder is not None:
+        real = ended[playing[ended] < episodes]  # idle arenas' endings are not heard
+        at_v, at_e = variant[real], playing[real]
+        lengths = info["episode_length"][real]
+        out["returns"][at_v, at_e] = info["episode_return"][real]
+        out["lengths"][at_v, at_e] = lengths
+        out["captured"][at_v, at_e] = info["captured"][real]
+        out["chase_fraction"][at_v, at_e] = chase[real] / lengths[:, None]
+        out["distance"][at_v, at_e] = travelled[real]
+        out["left_area"][at_v, at_e] = info["left_area"][real]
+        out["collisions"][at_v, at_e] = collisions[real]
+        out["contact_steps"][at_v, at_e] = contact[real]
+        if traces is not None and recorder is not None:
+            for row in ended.tolist():
                 trace = traces.finish(
-                    int(row), bool(truncated[row, 0]), env.core.world.positions[row], env.core.world.obstacles[row]
+                    row, bool(truncated[row, 0]), env.core.world.positions[row], env.core.world.obstacles[row]
                 )
-                if e < episodes:
-                    recorder.log_episode(e + 1, trace)
-            playing[row], following[row] = following[row], int(handed[v])
-            handed[v] += 1
+                if playing[row] < episodes:
+                    recorder.log_episode(int(playing[row]) + 1, trace)
+        # in arena order: an ended arena starts its variant's next reserved episode and reserves the
+        # next unreserved one (a variant's arenas are consecutive rows, so a rank within it is an offset)
+        mine = variant[ended]
+        rank = np.arange(len(ended)) - np.searchsorted(mine, mine)
+        playing[ended] = following[ended]
+        following[ended] = handed[mine] + rank
+        handed += np.bincount(mine, minlength=count)
         queue(ended)
         chase[ended] = travelled[ended] = collisions[ended] = contact[ended] = 0.0
         step[ended] = 0
         redraw(ended)
     return [Episodes(**{k: x[v] for k, x in out.items()}) for v in range(count)]
+
+
+def _batch_key(actor: Actor) -> Any:
+    """What an actor's rows are grouped by for one call a step: the actor itself, or for a
+    scripted rule whose rows act independently (``row_wise``) its kind and settings, so that
+    copies made for many variants act in one call."""
+    policy = getattr(actor, "policy", None)
+    if isinstance(actor, ScriptedAgent) and getattr(policy, "row_wise", False):
+        return (type(policy), tuple(sorted(vars(policy).items())))
+    return id(actor)
 
 
 def standard_error(values: np.ndarray) -> float:
@@ -430,25 +468,10 @@ def evaluate_agents(
     ``perturbations`` (:mod:`pursuit_bench.env.perturbations`) change every variant's world and
     senses alike; the result names them (``perturbations``). ``prey_check=False`` skips the
     prey's check (two plays fewer)."""
-    names = list(agents)
-    obstacles = bool((task_options or {}).get("obstacles"))
-    predators, prey = names[:-1], names[-1]
-    kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
-    epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
-
-    fleeing_prey = ScriptedAgent(prey, FleeingPrey(obstacles=obstacles))
-    scripted_prey = isinstance(agents[prey], ScriptedAgent)  # FleeingPrey put in as a held-out opponent, say
-    checking = prey_epsilon is not None and prey_check and not scripted_prey  # a learning prey: greedy, and FleeingPrey
-    variants: list[Variant] = [(agents, epsilons)]
-    for name in predators:
-        for rule in (AlwaysChase, AlwaysStalk):
-            variants.append(({**agents, name: ScriptedAgent(name, rule(avoidance=avoidance))}, epsilons))
-    if checking:
-        variants += [(agents, {}), ({**agents, prey: fleeing_prey}, {})]
+    variants, checking = _protocol_variants(agents, prey_epsilon, prey_check, avoidance, task_options)
     crn = perturbations is None or not perturbations.senses
     if crn:  # every variant in one batch of arenas, with common random numbers
-        p = perturbations or Perturbations()
-        options = {**(task_options or {}), **p.task_options()}
+        options = {**(task_options or {}), **(perturbations or Perturbations()).task_options()}
 
         def batch(chosen: list[Variant], rec: Recorder | None = None) -> list[Episodes]:
             return play_variants(
@@ -466,6 +489,109 @@ def evaluate_agents(
             )
             for k, (actors, eps) in enumerate(variants)
         ]  # fmt: skip
+    return _protocol_result(
+        condition, agents, played, episodes=episodes, seed=seed, prey_epsilon=prey_epsilon,
+        predator_kind=predator_kind, checking=checking, crn=crn, task_options=task_options,
+        perturbations=perturbations,
+    )  # fmt: skip
+
+
+def evaluate_together(
+    condition: str,
+    setups: list[tuple[dict[str, Actor], float | None]],
+    *,
+    episodes: int,
+    seed: int,
+    num_envs: int = 64,
+    backend: Backend = "pymunk",
+    predator_kind: str | None = None,
+    check: Callable[[], None] = lambda: None,
+    task_options: Mapping[str, Any] | None = None,
+    avoidance: bool = False,
+    perturbations: Perturbations | None = None,
+    prey_check: bool = True,
+) -> list[dict[str, Any]]:
+    """:func:`evaluate_agents` of each setup (the agents and the prey's ε, ``prey_epsilon``) with
+    the options given, every setup's variants in one batch of arenas: the same results (common
+    random numbers make an episode's play independent of what is played beside it), at a cost
+    per step shared by all of them. A study judges a run against every member of a population
+    so. Perturbed senses (each variant played alone) and a recording go through
+    :func:`evaluate_agents`."""
+    if perturbations is not None and perturbations.senses:
+        raise ValueError("perturbed senses play each variant alone: use evaluate_agents")
+    plans = [_protocol_variants(agents, eps, prey_check, avoidance, task_options) for agents, eps in setups]
+    options = {**(task_options or {}), **(perturbations or Perturbations()).task_options()}
+    played = play_variants(
+        condition, [v for variants, _ in plans for v in variants], episodes, seed=seed, num_envs=num_envs,
+        backend=backend, check=check, task_options=options,
+        parts=[k for k, (variants, _) in enumerate(plans) for _ in variants],
+    )  # fmt: skip
+    out, at = [], 0
+    for (agents, eps), (variants, checking) in zip(setups, plans, strict=True):
+        mine, at = played[at : at + len(variants)], at + len(variants)
+        out.append(
+            _protocol_result(
+                condition,
+                agents,
+                mine,
+                episodes=episodes,
+                seed=seed,
+                prey_epsilon=eps,
+                predator_kind=predator_kind,
+                checking=checking,
+                crn=True,
+                task_options=task_options,
+                perturbations=perturbations,
+            )
+        )
+    return out
+
+
+def _protocol_variants(
+    agents: dict[str, Actor],
+    prey_epsilon: float | None,
+    prey_check: bool,
+    avoidance: bool,
+    task_options: Mapping[str, Any] | None,
+) -> tuple[list[Variant], bool]:
+    """The protocol's variants of ``agents`` (as trained, then each predator replaced by
+    always-chase and by always-stalk, then the prey's check where it applies) and whether the
+    prey's check is among them."""
+    names = list(agents)
+    predators, prey = names[:-1], names[-1]
+    epsilons = {} if prey_epsilon is None else {prey: prey_epsilon}
+    scripted_prey = isinstance(agents[prey], ScriptedAgent)  # FleeingPrey put in as a held-out opponent, say
+    checking = prey_epsilon is not None and prey_check and not scripted_prey  # a learning prey: greedy, and FleeingPrey
+    variants: list[Variant] = [(agents, epsilons)]
+    for name in predators:
+        for rule in (AlwaysChase, AlwaysStalk):
+            variants.append(({**agents, name: ScriptedAgent(name, rule(avoidance=avoidance))}, epsilons))
+    if checking:
+        fleeing_prey = ScriptedAgent(prey, FleeingPrey(obstacles=bool((task_options or {}).get("obstacles"))))
+        variants += [(agents, {}), ({**agents, prey: fleeing_prey}, {})]
+    return variants, checking
+
+
+def _protocol_result(
+    condition: str,
+    agents: dict[str, Actor],
+    played: list[Episodes],
+    *,
+    episodes: int,
+    seed: int,
+    prey_epsilon: float | None,
+    predator_kind: str | None,
+    checking: bool,
+    crn: bool,
+    task_options: Mapping[str, Any] | None,
+    perturbations: Perturbations | None,
+) -> dict[str, Any]:
+    """What :func:`evaluate_agents` returns, from its variants' episodes (``played``, in the
+    order :func:`_protocol_variants` gives them)."""
+    names = list(agents)
+    obstacles = bool((task_options or {}).get("obstacles"))
+    predators, prey = names[:-1], names[-1]
+    kind = predator_kind or str(getattr(agents[predators[0]], "kind", "trained"))
     trained = played[0]
     panels = []
     for i, name in enumerate(predators):
