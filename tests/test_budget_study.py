@@ -148,3 +148,52 @@ def test_a_first_part_carried_on_equals_the_run_trained_in_one_go(tmp_path: Path
     assert (carried / "metrics.jsonl").read_text() == (one_go / "metrics.jsonl").read_text()
     with pytest.raises(SystemExit, match="not the plan's"):
         driver.carry_on(first, tmp_path / "on", design.continuation_plan("population", "1p-high", "flat"), name)
+
+
+def driver_command(work: Path) -> list[str]:
+    tiny = ["--preset", "quick", "--budgets", "3,150,300", "--num-envs", "2", "--checkpoint-every", "25"]
+    options = ["--conditions", "3p-low-shared", "--stages", "population", "--no-population-check"]
+    return [sys.executable, str(STUDY / "run.py"), "--work", str(work), *tiny, *options, "--skip-build-check"]
+
+
+@pytest.mark.slow
+@pytest.mark.long
+def test_the_driver_stopped_by_sigterm_resumes_to_the_same_runs_and_populations(tmp_path: Path) -> None:
+    """A tiny population stage: stopped by SIGTERM while it trains on (exit 143), refused while
+    it runs by a second driver (its lock), then resumed by the same command; every run's final
+    checkpoint and every budget's population equal those of a driver that never stopped."""
+    import os
+    import signal
+    import time
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    whole = subprocess.run(driver_command(tmp_path / "a"), env=env, capture_output=True, text=True, timeout=600)
+    assert whole.returncode == 0, whole.stderr
+    process = subprocess.Popen(
+        driver_command(tmp_path / "b"), env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
+    log = tmp_path / "b" / "progress.log"
+    deadline = time.monotonic() + 300
+    while "on to 300 episodes" not in (log.read_text() if log.exists() else ""):
+        assert time.monotonic() < deadline and process.poll() is None, "the driver never reached its second part"
+        time.sleep(0.2)
+    second = subprocess.run(driver_command(tmp_path / "b"), env=env, capture_output=True, text=True, timeout=60)
+    assert second.returncode == 2 and "in use" in second.stderr
+    time.sleep(1.0)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=300)
+    assert process.returncode == 143, stderr
+    assert "stopped: rerun the same command" in log.read_text()
+    again = subprocess.run(driver_command(tmp_path / "b"), env=env, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    for run in sorted((tmp_path / "a" / "on").glob("*/runs/*")):
+        twin = tmp_path / "b" / run.relative_to(tmp_path / "a")
+        same(agents_of(run / "checkpoint.pt"), agents_of(twin / "checkpoint.pt"), str(run.name))
+    from pursuit_bench import pretrained
+
+    written = sorted((tmp_path / "a" / "populations").glob("*/*/*/prey_0.safetensors"))
+    assert len(written) == 3 * 8
+    for path in written:
+        twin = tmp_path / "b" / path.relative_to(tmp_path / "a")
+        ours, theirs = pretrained.read(path)[0], pretrained.read(twin)[0]
+        assert set(ours) == set(theirs) and all(torch.equal(ours[k], theirs[k]) for k in ours), path

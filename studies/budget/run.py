@@ -26,6 +26,7 @@ import argparse
 import datetime
 import json
 import os
+import resource
 import shutil
 import signal
 import subprocess
@@ -40,6 +41,8 @@ import design
 HERE = Path(__file__).resolve().parent
 WORK = Path("/work/budget-study")
 STAGES = ("population", "judged")
+#: A progress line per run every this many episodes.
+PROGRESS_EVERY = 25_000
 
 
 def log(work: Path, line: str) -> None:
@@ -95,12 +98,32 @@ def sweep(work: Path, folder: Path, plan: Any, workers: int, stop: list[bool]) -
     note = open_sweep(folder, plan)
     if note:
         log(work, note)
+    episodes = {name: 0 for name in plan.runs()}
+    start = child_cpu()
 
     def heard(kind: str, name: str, value: Any) -> None:
         if kind == "done":
             log(work, f"trained {name}")
+        elif kind == "episode":
+            if not episodes[name]:
+                log(work, f"{name}: training from episode {value}")
+            elif value % PROGRESS_EVERY == 0:
+                log(work, f"{name}: {value} episodes")
+            episodes[name] = value
 
-    return run_sweep(folder, plan, workers=workers, record=False, on_message=heard, should_stop=lambda: stop[0])
+    done = run_sweep(folder, plan, workers=workers, record=False, on_message=heard, should_stop=lambda: stop[0])
+    record = {"sweep": folder.name, "part": folder.parent.name, "done": done, "worker_cpu_s": child_cpu() - start}
+    record["last_episode"] = {name: n for name, n in episodes.items() if n}
+    with (work / "cpu.jsonl").open("a") as file:  # PLAN.md's rates, from the study's own runs
+        file.write(json.dumps(record) + "\n")
+    log(work, f"{folder.parent.name}/{folder.name}: workers' CPU {record['worker_cpu_s']:.0f} s this time")
+    return done
+
+
+def child_cpu() -> float:
+    """CPU seconds of this process's ended children (the sweep's workers, once joined)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def trained(folder: Path, episodes: int) -> bool:
