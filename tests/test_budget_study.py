@@ -197,3 +197,38 @@ def test_the_driver_stopped_by_sigterm_resumes_to_the_same_runs_and_populations(
         twin = tmp_path / "b" / path.relative_to(tmp_path / "a")
         ours, theirs = pretrained.read(path)[0], pretrained.read(twin)[0]
         assert set(ours) == set(theirs) and all(torch.equal(ours[k], theirs[k]) for k in ours), path
+
+
+def test_the_replay_check_passes_the_rule_study_s_result_only_to_the_bit(tmp_path: Path, monkeypatch) -> None:
+    import argparse
+    import gzip
+
+    played: dict[str, Any] = {
+        "protocol": "crn-1",
+        "episodes": 60,
+        "eval_seed": 12345,
+        "pool": {"15000": {"FleeingPrey": {"panels": {"predator_0": [0.5, 0.25, 0.125]}, "capture_rate": 0.5}}},
+    }
+    committed = {**played, "pool": {**played["pool"], "1500": {}}, "name": "1p-high-flat-seed3"}
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "1p-high-flat-seed3.json.gz").write_bytes(gzip.compress(json.dumps(committed).encode()))
+    monkeypatch.setattr(rule_study, "evaluate_run", lambda run, population, budgets: json.loads(json.dumps(played)))
+    args = argparse.Namespace(
+        work=tmp_path, budgets=design.BUDGETS, rule_results=tmp_path / "results", rule_population=tmp_path
+    )
+    driver.replay_check(args, "1p-high", tmp_path / "1p-high-flat-seed3")
+    assert json.loads((tmp_path / "replay" / "1p-high-flat-seed3.json").read_text())["equal"] is True
+    played["pool"]["15000"]["FleeingPrey"]["panels"]["predator_0"][2] += 2**-40  # one variant, the last bits
+    with pytest.raises(SystemExit, match="not the rule study's run"):
+        driver.replay_check(args, "1p-high", tmp_path / "1p-high-flat-seed3")
+    with pytest.raises(SystemExit, match="no committed rule-study result"):
+        driver.replay_check(args, "1p-high", tmp_path / "1p-high-flat-seed4")
+
+
+def test_only_the_protocol_s_cut_shortens_the_judged_runs() -> None:
+    assert len(design.continuation_plan("judged", "1p-high", "both").runs()) == 20
+    cut = design.continuation_plan("judged", "1p-high", "both", judged_seeds=6)
+    assert sorted(cut.runs()) == sorted(f"1p-high-{k}-seed{s}" for k in design.KINDS for s in range(6))
+    for wrong in (5, 11):
+        with pytest.raises(ValueError, match="expected 6 to 10"):
+            design.continuation_plan("judged", "1p-high", "both", judged_seeds=wrong)

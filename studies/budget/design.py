@@ -56,6 +56,8 @@ ALPHA = 0.05
 FAILURE_MARGIN = -0.05
 #: The core-hours the protocol's seed cut starts from (PROTOCOL.md, "Seeds").
 CUT_ABOVE_CORE_HOURS = 80.0
+#: The fewest judged seeds a kind the cut may leave in a condition.
+MIN_CUT_SEEDS = 6
 
 #: The build that trains every run (PROTOCOL.md, "Build"): ``build.json`` beside this file.
 BUILD_COMMIT = "d9886b9a83fedb2d3bddf7f56205833f96e20624"
@@ -147,10 +149,22 @@ def first_part(
     return sweep_plan("both", [condition], seeds.start, len(seeds), budgets[0], rule_keep, **trial)
 
 
-def continuation_plan(stage: str, condition: str, kind: str, budgets: tuple[int, ...] = BUDGETS, **trial: Any) -> Any:
+def continuation_plan(
+    stage: str,
+    condition: str,
+    kind: str,
+    budgets: tuple[int, ...] = BUDGETS,
+    judged_seeds: int = len(JUDGED_SEEDS),
+    **trial: Any,
+) -> Any:
     """The plan of the same runs trained on from their first part to ``budgets[-1]``, every
-    other budget's checkpoint kept (the first's is the first part's end, copied)."""
+    other budget's checkpoint kept (the first's is the first part's end, copied). A judged
+    stage trains on seeds 0 … ``judged_seeds`` − 1 (fewer than 10 only by PROTOCOL.md's cut)."""
     seeds = stage_seeds(stage, kind)
+    if stage == "judged":
+        if isinstance(judged_seeds, bool) or not MIN_CUT_SEEDS <= judged_seeds <= len(JUDGED_SEEDS):
+            raise ValueError(f"judged_seeds={judged_seeds!r}: expected {MIN_CUT_SEEDS} to {len(JUDGED_SEEDS)}")
+        seeds = range(seeds.start, seeds.start + judged_seeds)
     which = kind if stage == "population" else "both"
     return sweep_plan(which, [condition], seeds.start, len(seeds), budgets[-1], tuple(budgets[:-1]), **trial)
 

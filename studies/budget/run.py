@@ -17,7 +17,9 @@ a resumed run equals one trained in one go). Run it against the study's pinned b
 The driver holds its work folder's lock, refuses a package other than ``build.json``'s (and,
 once started, other than the one it started with: ``study.json``), and on SIGTERM or SIGINT stops
 its workers (each checkpoints its stack) and exits 143; the same command resumes exactly.
-Evaluation is not here yet: it is added before the first judged evaluation, by PROTOCOL.md.
+Before a judged run is carried on, its first part is replayed against the rule study's population
+and must give the rule study's committed result (PROTOCOL.md). The study's own evaluation is not
+here yet.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import design
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
 WORK = Path("/work/budget-study")
 STAGES = ("population", "judged")
 #: A progress line per run every this many episodes.
@@ -175,11 +178,36 @@ def population_check(work: Path, condition: str, kind: str, run: Path, committed
     log(work, f"{run.name}: prey at its first part's end equals the committed {condition}/{member} to the bit")
 
 
+def replay_check(args: Any, condition: str, run: Path) -> None:
+    """SystemExit unless a judged run's first part, played at its end against the rule study's
+    population by the rule study's evaluation, gives the rule study's committed result for that
+    budget bit for bit (every member, every variant). What it played is kept in ``--work/replay/``."""
+    import gzip
+
+    from pursuit_bench.io.files import atomic_write_text
+    from pursuit_bench.study import rule_study
+
+    committed_path = args.rule_results / f"{run.name}.json.gz"
+    if not committed_path.exists():
+        raise SystemExit(f"{committed_path}: no committed rule-study result to replay {run.name} against")
+    committed = json.loads(gzip.decompress(committed_path.read_bytes()))
+    budget = str(args.budgets[0])
+    played = rule_study.evaluate_run(run, args.rule_population / condition, budgets=(args.budgets[0],))
+    same = all(played[k] == committed[k] for k in ("protocol", "episodes", "eval_seed"))
+    same = same and played["pool"][budget] == committed["pool"][budget]
+    (args.work / "replay").mkdir(exist_ok=True)
+    atomic_write_text(args.work / "replay" / f"{run.name}.json", json.dumps({"equal": same, **played}) + "\n")
+    if not same:
+        log(args.work, f"{run.name}: its {budget}-episode result differs from the rule study's committed one: stopped")
+        raise SystemExit(f"{run.name}: not the rule study's run (its replay at {budget} episodes differs)")
+    log(args.work, f"{run.name}: replayed at {budget} episodes, the rule study's committed result to the bit")
+
+
 def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> bool:
     """One sweep's runs through both parts; whether they are done."""
     trial = args.trial
     tag = f"{stage}-{kind}-{condition}" if stage == "population" else f"judged-{condition}"
-    on_plan = design.continuation_plan(stage, condition, kind, args.budgets, **trial)
+    on_plan = design.continuation_plan(stage, condition, kind, args.budgets, args.judged_seeds, **trial)
     on = args.work / "on" / tag
     names = sorted(on_plan.runs())
     if all(trained(on / "runs" / n, on_plan.episodes) for n in names):
@@ -196,8 +224,12 @@ def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> 
         open_sweep(on, on_plan)  # the plan first: a sweep's folder holds its plan before its runs
         (on / "runs").mkdir(parents=True, exist_ok=True)
         for name in waiting:
+            if stop[0]:
+                return False
             if stage == "population" and not args.no_population_check:
                 population_check(args.work, condition, kind, first / "runs" / name, args.committed)
+            if stage == "judged" and not args.no_replay_check:
+                replay_check(args, condition, first / "runs" / name)
             carry_on(first / "runs" / name, on, on_plan, name)
     log(args.work, f"{tag}: on to {on_plan.episodes} episodes, checkpoints kept at {list(on_plan.keep_checkpoints)}")
     return sweep(args.work, on, on_plan, args.workers, stop)
@@ -307,6 +339,12 @@ def main() -> int:
     parser.add_argument("--num-envs", type=int, default=None, help="(trying the driver only)")
     parser.add_argument("--checkpoint-every", type=int, default=None, help="(trying the driver only)")
     parser.add_argument("--committed", type=Path, default=None, help="(tests only) the rule-study populations' root")
+    parser.add_argument(
+        "--judged-seeds", type=int, default=len(design.JUDGED_SEEDS), help="Only by PROTOCOL.md's cut: 6 to 10."
+    )
+    parser.add_argument("--rule-results", type=Path, default=ROOT / "results" / "rule-study" / "runs")
+    parser.add_argument("--rule-population", type=Path, default=None, help="Default: the package's rule-study.")
+    parser.add_argument("--no-replay-check", action="store_true", help="(trying the driver only)")
     parser.add_argument("--no-population-check", action="store_true", help="(trying the driver only)")
     parser.add_argument("--skip-build-check", action="store_true", help="(tests only)")
     args = parser.parse_args()
@@ -320,6 +358,13 @@ def main() -> int:
         print(f"--stages: unknown {unknown}; expected some of {', '.join(STAGES)}", file=sys.stderr)
         return 2
     args.stages = [s for s in STAGES if s in args.stages]
+    if not design.MIN_CUT_SEEDS <= args.judged_seeds <= len(design.JUDGED_SEEDS):
+        print(f"--judged-seeds {args.judged_seeds}: expected {design.MIN_CUT_SEEDS} to 10", file=sys.stderr)
+        return 2
+    if args.rule_population is None:
+        from pursuit_bench.pretrained import populations
+
+        args.rule_population = populations.FOLDER / design.RULE_POPULATION
     if args.workers < 1:
         print(f"--workers {args.workers}: expected at least 1", file=sys.stderr)
         return 2
@@ -341,7 +386,7 @@ def main() -> int:
             print(f"--budgets {args.budgets}: expected at least two increasing integers >= 1", file=sys.stderr)
             return 2
         args.rule_keep = ()
-    trying = args.trial or args.budgets != design.BUDGETS or args.no_population_check
+    trying = args.trial or args.budgets != design.BUDGETS or args.no_population_check or args.no_replay_check
     if trying and args.work == WORK:
         print("trying the driver (--budgets, --preset …): give another --work than the study's", file=sys.stderr)
         return 2
