@@ -114,7 +114,7 @@ def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monke
     fast = evaluate_agents(condition, pretrained.load(condition), episodes=40, seed=3, num_envs=16)
     worst = [0.0]
 
-    def torchs(self: DQNLearner, obs: np.ndarray, member: int) -> np.ndarray:
+    def torchs(self: DQNLearner, obs: np.ndarray, member: int, parts: np.ndarray | None = None) -> np.ndarray:
         everyone = np.zeros((self.members, *obs.shape), dtype=np.float32)
         everyone[member] = obs
         q = self.evaluate(everyone)[0][member]

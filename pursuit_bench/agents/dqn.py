@@ -164,8 +164,12 @@ class DQNLearner:
         q, value = q_all[0], value_all[0]
         if self.n_actions == 1:
             return q  # nothing to decide
-        top = np.sort(q, axis=-1)[:, -2:]
-        close = top[:, 1] - top[:, 0] <= DECISIVE_GAP * decision_scale(q, value)
+        if self.n_actions == 2:  # the two best are the two: their gap is |q1 - q0| (the same number)
+            gap = np.abs(q[:, 1] - q[:, 0])
+        else:
+            top = np.sort(q, axis=-1)[:, -2:]
+            gap = top[:, 1] - top[:, 0]
+        close = gap <= DECISIVE_GAP * decision_scale(q, value)
         if not close.any():
             return q
         if parts is None:

@@ -327,8 +327,9 @@ def play_variants(
     while (busy := playing < episodes).any():  # idle arenas step on with action 0, unheard
         check()
         actions = np.zeros((n, env.n_agents, 2), dtype=np.int64)
-        q_values = np.full((n, n_pred, 2), np.nan)
-        values = np.full((n, n_pred), np.nan)
+        if traces is not None:  # what a recording shows of the hierarchical predators
+            q_values = np.full((n, n_pred, 2), np.nan)
+            values = np.full((n, n_pred), np.nan)
         for i in range(env.n_agents):
             for actor, every in groups[i]:
                 rows = every[busy[every]]
