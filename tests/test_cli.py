@@ -139,7 +139,7 @@ def test_view_without_a_display_says_what_to_do(tmp_path: Path, monkeypatch) -> 
     recording = tmp_path / "x.rrd"
     recording.write_bytes(b"RRF2")
     code, output = run_cli("view", str(recording))
-    assert code == 1 and "no display" in output and "Traceback" not in output
+    assert code == 2 and "no display" in output and "Traceback" not in output  # a refusal like every other
     assert "rerun --web-viewer --bind 127.0.0.1 " in output
 
 

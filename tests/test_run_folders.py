@@ -181,7 +181,7 @@ def test_view_opens_a_folder_and_refuses_what_is_not_a_recording(tmp_path: Path,
     code, output = run_cli("view", str(out / "config.json"))
     assert code == 2 and "not a Rerun recording" in output
     code, output = run_cli("view", str(out))
-    assert code == 1 and str(out / "train.rrd") in output and "no display" in output
+    assert code == 2 and str(out / "train.rrd") in output and "no display" in output
 
 
 def test_load_agents_returns_a_runs_agents_ready_to_act_and_evaluate(tmp_path: Path) -> None:

@@ -49,7 +49,7 @@ def view(path: Path) -> None:
         files = [path]
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         shown = " ".join(str(f) for f in files)
-        raise click.ClickException(
+        raise BadInput(  # a refusal like the others: exit 2
             f"no display here to open the viewer on. Copy {shown} to a machine with one and run "
             f"`rerun {shown}`, or serve the web viewer from here to this machine only: "
             f"`rerun --web-viewer --bind 127.0.0.1 {shown}` and open the address it prints in a browser "
