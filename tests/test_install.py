@@ -153,9 +153,10 @@ def test_the_wheel_installs_the_environment_alone_then_the_training_stack(wheel:
     assert "3p-high-individual" in _ok(_run(script, "conditions", cwd=work))
     result = _run(script, "train", "--episodes", "5", "--out", work / "run", cwd=work)
     assert result.returncode == 1 and result.stderr.strip() == (
-        "Error: pursuit-bench train needs torch, which pursuit-bench's 'train' extra installs: "
+        "Error: pursuit-bench train needs torch, which pursuit-bench's 'train' extra installs: in a clone, run "
+        "scripts/install.sh (it installs torch's CPU build, then -e '.[train]'); from a wheel, "
         "pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, "
-        "then pip install 'pursuit-bench[train]'"
+        f"then pip install 'path/to/{wheel.name}[train]'"
     ), result.stderr
     assert not (work / "run").exists()
 

@@ -80,11 +80,15 @@ def test_a_missing_module_names_its_extra_in_one_line(monkeypatch) -> None:
     monkeypatch.setattr(entry.sys, "argv", ["pursuit-bench", "train", "--episodes", "5"])
     message = entry.missing_extra(ModuleNotFoundError("No module named 'torch'", name="torch"))
     assert message == (
-        "Error: pursuit-bench train needs torch, which pursuit-bench's 'train' extra installs: "
+        "Error: pursuit-bench train needs torch, which pursuit-bench's 'train' extra installs: in a clone, run "
+        "scripts/install.sh (it installs torch's CPU build, then -e '.[train]'); from a wheel, "
         "pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, "
-        "then pip install 'pursuit-bench[train]'"
+        f"then pip install 'path/to/pursuit_bench-{entry._version()}-py3-none-any.whl[train]'"
     )
-    assert str(entry.missing_extra(ModuleNotFoundError(name="ray.util"))).endswith(": pip install 'pursuit-bench[ray]'")
+    # pursuit-bench is on no index (issue 67): the message names what works from a clone or a wheel
+    assert "pursuit-bench[" not in message
+    ray = str(entry.missing_extra(ModuleNotFoundError(name="ray.util")))
+    assert "run scripts/install.sh ray (" in ray and ray.endswith("-py3-none-any.whl[ray]'"), ray
     assert entry.missing_extra(ModuleNotFoundError(name="stable_baselines3")) is None
 
 

@@ -32,11 +32,24 @@ def missing_extra(error: ModuleNotFoundError) -> str | None:
     if module not in EXTRA_OF:
         return None
     distribution, extra = EXTRA_OF[module]
-    install = f"pip install 'pursuit-bench[{extra}]'"
+    # pursuit-bench is on no index: the extra is installed from the clone or from the wheel's path
+    wheel = f"pip install 'path/to/pursuit_bench-{_version()}-py3-none-any.whl[{extra}]'"
     if extra == "train":  # torch comes with it: its CPU build first, or pip takes the CUDA one (GBs)
-        install = f"pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, then {install}"
+        wheel = f"pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu, then {wheel}"
+    script = "scripts/install.sh" + ("" if extra == "train" else f" {extra}")
+    install = f"in a clone, run {script} (it installs torch's CPU build, then -e '.[{extra}]'); from a wheel, {wheel}"
     command = " ".join(["pursuit-bench", *(a for a in sys.argv[1:2] if not a.startswith("-"))])
     return f"Error: {command} needs {distribution}, which pursuit-bench's '{extra}' extra installs: {install}"
+
+
+def _version() -> str:
+    """The installed pursuit-bench's version (its wheel's name holds it)."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("pursuit-bench")
+    except metadata.PackageNotFoundError:
+        return "VERSION"
 
 
 def main() -> None:
