@@ -125,6 +125,44 @@ def test_a_second_process_cannot_use_a_busy_folder(tmp_path: Path) -> None:
     assert (out / "config.json").read_bytes() == config
     code, output = run_cli("eval", str(out), "--episodes", "4", "--no-record")
     assert code == 0, output  # released
+    assert not (out / runs.LOCK).exists()  # and the holder removed its lock file as it left (issue 67)
+
+
+def test_the_lock_file_goes_with_its_holder_and_a_removed_one_is_not_held(tmp_path: Path, monkeypatch) -> None:
+    """The holder removes ``.lock`` on leaving; one killed outright leaves it, and it blocks no
+    one. A process that opened ``.lock`` just before its holder removed it locks a file no other
+    process will open: it must see that and lock the new one, or two would hold the folder."""
+    import fcntl
+    import os
+
+    from pursuit_bench.io import files
+
+    with runs.locked(tmp_path):
+        assert (tmp_path / runs.LOCK).read_text() == f"{os.getpid()}\n"
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / runs.LOCK).write_text("12345\n")  # left by a process killed outright
+    with runs.locked(tmp_path):
+        pass
+    assert list(tmp_path.iterdir()) == []
+
+    opened, real_open = [], os.open
+
+    def open_then_removed(path, *args):  # the last holder removes the file just after it is opened
+        fd = real_open(path, *args)
+        if not opened:
+            os.unlink(path)
+        opened.append(fd)
+        return fd
+
+    monkeypatch.setattr(files.os, "open", open_then_removed)
+    with runs.locked(tmp_path):
+        assert len(opened) == 2  # the removed file's lock let go, the new file locked
+        monkeypatch.undo()
+        other = os.open(tmp_path / runs.LOCK, os.O_RDWR)
+        with pytest.raises(BlockingIOError):  # a second process opening .lock now finds it held
+            fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.close(other)
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.slow

@@ -39,19 +39,49 @@ class RunBusy(ValueError):
     """Another process holds the run folder."""
 
 
+#: The file of a folder that :func:`locked` locks.
+LOCK_FILE = ".lock"
+
+
 @contextlib.contextmanager
 def locked(folder: Path) -> Iterator[None]:
     """Hold the folder's exclusive lock (``fcntl.flock`` on ``.lock``) while the block runs;
-    :class:`RunBusy` at once if another process holds it. The lock dies with its process."""
-    fd = os.open(folder / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
-    try:
+    :class:`RunBusy` at once if another process holds it. The lock is advisory (pursuit-bench's
+    commands ask for it; nothing else is stopped) and dies with its process. On leaving the block
+    the holder removes ``.lock``, still holding it; one killed outright leaves the file, which
+    then holds nothing and is taken by the next process. Removing it is safe because a process
+    that gets the lock checks that ``.lock`` is still the file it opened, and locks the new one if
+    the last holder removed it in between."""
+    path = folder / LOCK_FILE
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            os.close(fd)
             raise RunBusy(f"{folder} is in use by another pursuit-bench process (pid {holder})") from None
+        except BaseException:
+            os.close(fd)
+            raise
+        if _is(path, fd):
+            break
+        os.close(fd)  # removed by its last holder after it was opened: a lock on no file, so again
+    try:
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         yield
     finally:
+        if _is(path, fd):
+            path.unlink(missing_ok=True)
         os.close(fd)
+
+
+def _is(path: Path, fd: int) -> bool:
+    """Whether ``path`` names the file open as ``fd``."""
+    try:
+        here = os.stat(path)
+    except FileNotFoundError:
+        return False
+    mine = os.fstat(fd)
+    return (here.st_dev, here.st_ino) == (mine.st_dev, mine.st_ino)
