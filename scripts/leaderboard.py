@@ -6,8 +6,8 @@ this writes, byte for byte. A partial row (scored in fewer conditions than all o
 fewer episodes per member than the leaderboard's) is marked † and listed after the full ones,
 its shortfall said under the table: its aggregate is over less, and no row is ranked.
 
-    python scripts/leaderboard.py            # rewrite docs/leaderboard.md
-    python scripts/leaderboard.py --check    # exit 1 if it is not up to date
+    python scripts/leaderboard.py            # rewrite docs/leaderboard.md and pursuit_bench/study/leaderboard.json
+    python scripts/leaderboard.py --check    # exit 1 if either is not up to date
 """
 
 from __future__ import annotations
@@ -25,20 +25,19 @@ RESULTS = ROOT / "results" / "score"
 PAGE = ROOT / "docs" / "leaderboard.md"
 BEGIN, END = "<!-- leaderboard:begin -->", "<!-- leaderboard:end -->"
 #: The leaderboard's episodes per member (the page's "How to submit a result").
-EPISODES = 20
+EPISODES = score.LEADERBOARD_EPISODES
 PARTIAL = "†"
+shortfall = score.shortfall
 
 
-def shortfall(result: dict[str, Any]) -> list[str]:
-    """What a score lacks against a full row of the leaderboard: conditions of the paper not
-    scored, fewer episodes per member than :data:`EPISODES`; empty for a full row."""
-    scored = [c for c in score.CONDITIONS if c in result["conditions"]]
-    out = []
-    if len(scored) < len(score.CONDITIONS):
-        out.append(f"{len(scored)} of {len(score.CONDITIONS)} conditions ({', '.join(scored)})")
-    if result["episodes"] < EPISODES:
-        out.append(f"{result['episodes']} episodes per member, not {EPISODES}")
-    return out
+def summary(results: Path = RESULTS) -> str:
+    """pursuit_bench/study/leaderboard.json: every row's name, settings and aggregate, which
+    ``pursuit-bench score`` places a result among (:func:`pursuit_bench.study.score.standing`)."""
+    rows: list[dict[str, Any]] = json.loads((results / "rows.json").read_text())
+    entries = [score.leaderboard_entry(row["who"], json.loads((results / row["file"]).read_text())) for row in rows]
+    about = "written by scripts/leaderboard.py from results/score/rows.json with docs/leaderboard.md"
+    lines = ",\n".join(f"  {json.dumps(entry, ensure_ascii=False)}" for entry in entries)  # a row a line
+    return f'{{\n "about": {json.dumps(about)},\n "rows": [\n{lines}\n ]\n}}\n'
 
 
 def tables(results: Path = RESULTS) -> str:
@@ -90,10 +89,11 @@ def render(page: str, results: Path = RESULTS) -> str:
 
 def main() -> None:
     page = PAGE.read_text()
-    new = render(page)
+    new, rows = render(page), summary()
     if "--check" in sys.argv:
-        sys.exit(0 if new == page else 1)
+        sys.exit(0 if new == page and score.LEADERBOARD.read_text() == rows else 1)
     atomic_write_text(PAGE, new)
+    atomic_write_text(score.LEADERBOARD, rows)
 
 
 if __name__ == "__main__":

@@ -333,7 +333,75 @@ def test_a_hand_written_agent_is_scored_in_one_command(tmp_path: Path, monkeypat
     assert ("PROVISIONAL" in output) is provisional and "a team of copies" in output
     assert list(result["conditions"]["3p-low-shared"]["per_slot"]) == ["predator_0", "predator_1", "predator_2"]
     assert ("PROVISIONAL" in (tmp_path / "out" / "score.md").read_text()) is provisional
+    # 3 episodes in one condition: not the leaderboard's settings, said in one line (issue 67)
+    placed = [line for line in output.splitlines() if "leaderboard" in line]
+    assert len(placed) == 1 and placed[0].startswith("not comparable with the leaderboard"), output
+    assert "3 episodes per member, its rows 20 (partial, †)" in placed[0] and "--episodes 20" in placed[0]
+    assert "N" + placed[0][1:] in (tmp_path / "out" / "score.md").read_text()  # the same in score.md
     sys.modules.pop("pursuer", None)
+
+
+def _committed(name: str) -> dict[str, Any]:
+    return json.loads((ROOT / "results" / "score" / name / "score.json").read_text())
+
+
+def test_a_score_is_placed_among_the_leaderboard_rows_at_its_settings_or_says_why_not() -> None:
+    """After the per-condition lines, ``score`` places the aggregate between the nearest leaderboard
+    rows at the same settings (role, population, episodes, seed, conditions), or says in one line
+    what differs (the page's † rule: fewer conditions or episodes is partial) and what would place it."""
+    chase = _committed("predator-always-chase")
+    lines = score.standing(chase)
+    assert lines[0].startswith("the leaderboard's nearest predator rows at these settings (population rule-study, ")
+    assert "20 episodes per member, seed 12345, all 10 conditions)" in lines[0]
+    # level with the always-chase row (it is that row), the next row above it the shipped reference
+    assert [line[4:].split("  ")[0] for line in lines[1:]] == ["always-chase", "this score", "hierarchical (shipped)"]
+    assert lines[2].startswith("  > ") and lines[2].endswith(score.aggregate_text(chase["aggregate"]))
+    halfway = {**chase, "aggregate": {**chase["aggregate"], "iqm": 0.6}}  # between pure pursuit and always-stalk
+    assert [line[4:].split("  ")[0] for line in score.standing(halfway)[1:]] == [
+        "pure pursuit",
+        "this score",
+        "always-stalk",
+    ]
+    # the 1-predator rows are partial: a score on the same two conditions is placed among them, marked
+    ppo = score.standing(_committed("predator-ppo"))
+    assert "2 conditions, partial († like these rows: 2 of 10 conditions (1p-low, 1p-high))" in ppo[0]
+    assert all("hierarchical" not in line for line in ppo[1:]) and any("PPO" in line for line in ppo[1:])
+
+    def why(**changed: Any) -> str:
+        (line,) = score.standing({**chase, **changed})
+        assert line.startswith("not comparable with the leaderboard (docs/leaderboard.md): "), line
+        return line
+
+    assert "100 episodes per member, its rows 20; --episodes 20 would place it" in why(episodes=100)
+    assert "10 episodes per member, its rows 20 (partial, †)" in why(episodes=10)
+    assert "seed 7, its rows 12345" in why(seed=7) and "--seed 12345" in why(seed=7)
+    assert "population provisional-prey, where its predator rows play rule-study" in why(population="provisional-prey")
+    three = {c: v for c, v in chase["conditions"].items() if c.startswith("3p")}
+    assert "4 of 10 conditions, on which no row was scored (partial, †); --conditions all" in why(conditions=three)
+    none = {**chase, "aggregate": {**chase["aggregate"], "iqm": None}}
+    assert score.standing(none) == ["no aggregate to place on the leaderboard: no condition has a normalized score"]
+    text = score.markdown(chase)
+    assert "## Against the leaderboard\n\nThe leaderboard's nearest predator rows" in text
+    assert "| **this score** | " in text and "| always-chase | 0.93 [0.90, 0.94] |" in text
+
+
+def test_a_prey_s_reference_is_the_learned_prey_and_an_undefined_score_says_why(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    fleeing = _committed("prey-fleeing")  # in 1p-low random and the learned prey both return -1.000
+    text = score.markdown(fleeing)
+    assert "| shipped (learned prey) |" in text and "shipped (hierarchical)" not in text
+    assert "| shipped (hierarchical) |" in score.markdown(_committed("predator-always-chase"))
+    why = "random and the reference (learned prey) both return -1.000 on these episodes, so there is no scale"
+    assert score.undefined_why(fleeing, "1p-low") == why and score.undefined_why(fleeing, "1p-high") is None
+    assert f"No normalized score (–): 1p-low: {why}." in text
+    # and in the terminal: the command's own lines, from these results
+    monkeypatch.setattr(score, "score", lambda *args, **kwargs: fleeing)
+    code, output = run_cli("score", "FleeingPrey", "--role", "prey", "--episodes", "20", "--out", str(tmp_path))
+    assert code == 0, output
+    assert f"1p-low: return -0.850, normalized – ({why})" in output
+    assert "1p-high: return -0.912, normalized 0.41" in output
+    assert "the leaderboard's nearest prey rows at these settings" in output and "  > this score" in output
 
 
 @pytest.mark.parametrize(
@@ -400,6 +468,7 @@ def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byt
     leaderboard = _leaderboard()
     page = (ROOT / "docs" / "leaderboard.md").read_text()
     assert leaderboard.render(page) == page
+    assert score.LEADERBOARD.read_text() == leaderboard.summary()  # the rows score places a result among
     assert f"--episodes {leaderboard.EPISODES} " in page.partition("## How to submit a result")[2]
     rows = json.loads((ROOT / "results" / "score" / "rows.json").read_text())
     for row in rows:

@@ -110,9 +110,12 @@ def score(
             if c["excluded"]
             else ""
         )
-        normalized = "–" if c["normalized"] is None else f"{c['normalized']:.2f}"
+        why = scoring.undefined_why(result, condition)
+        normalized = f"– ({why})" if why else f"{c['normalized']:.2f}"
         click.echo(f"{condition}: return {c['mean_return']:+.3f}, normalized {normalized}{excluded}")
     agg = result["aggregate"]
     click.echo(f"aggregate (IQM of normalized scores): {scoring.aggregate_text(agg)}")
+    for line in scoring.standing(result):
+        click.echo(line)
     warning = "PROVISIONAL population; " if result["provisional"] else ""
     click.echo(f"{warning}results in {out / 'score.json'} and {out / 'score.md'}")

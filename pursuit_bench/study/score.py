@@ -47,6 +47,13 @@ RESAMPLES = 2000
 #: The ε the paper's evaluation protocol gives a learned prey (section 3.4); predators act greedily.
 PREY_EPSILON = 0.1
 SCORE_FORMAT = "pursuit-bench-score-1"
+#: The leaderboard's settings (docs/leaderboard.md, "How to submit a result"): episodes per member
+#: (a row with fewer, or fewer conditions than all, is partial, †) and the seed every row shares.
+LEADERBOARD_EPISODES = 20
+LEADERBOARD_SEED = 12345
+#: The leaderboard's rows as ``score`` places a result among them (:func:`standing`): written with
+#: docs/leaderboard.md by scripts/leaderboard.py, shipped in the package.
+LEADERBOARD = Path(__file__).with_name("leaderboard.json")
 
 
 class UniformRandom:
@@ -618,7 +625,7 @@ def markdown(result: dict[str, Any]) -> str:
         leaderboard_row(result),
         "",
         "| condition | mean return [95 % CI] | normalized | "
-        + " | ".join("shipped (hierarchical)" if r == SHIPPED else r for r in refs)
+        + " | ".join(reference_heading(r, result["role"]) for r in refs)
         + " | members (excluded) |",
         "|---|---|---:|" + "---:|" * len(refs) + "---|",
     ]
@@ -630,7 +637,144 @@ def markdown(result: dict[str, Any]) -> str:
             + f" | {', '.join(c['members'])}{excluded} |"
         )
     lines += ["", f"Interval: {result['interval']}. Normalization: {result['normalization']}.", ""]
+    undefined = {c: why for c in result["conditions"] if (why := undefined_why(result, c))}
+    if undefined:
+        lines += ["No normalized score (–): " + "; ".join(f"{c}: {why}" for c, why in undefined.items()) + ".", ""]
+    placed = standing(result)
+    lines += ["## Against the leaderboard", "", placed[0][:1].upper() + placed[0][1:]]
+    if len(placed) > 1:
+        lines += ["", "| row | IQM, normalized [95 % CI] |", "|---|---|"]
+        lines += [f"| {'**' + who + '**' if mine else who} | {text} |" for who, text, mine in _placed_rows(result)]
+    lines.append("")
     return "\n".join(lines)
+
+
+def reference_heading(key: str, role: str) -> str:
+    """A reference's column heading: the shipped agents are hierarchical predators, or for a prey the
+    learned prey trained with them."""
+    if key != SHIPPED:
+        return key
+    return "shipped (hierarchical)" if role == "predator" else "shipped (learned prey)"
+
+
+def undefined_why(result: dict[str, Any], condition: str) -> str | None:
+    """Why ``condition`` has no normalized score, in words (the reference returns what random
+    does: no scale), or None where it has one."""
+    c = result["conditions"][condition]
+    if c["normalized"] is not None:
+        return None
+    value = fixed(c["references"]["random"]["mean_return"], "+.3f")
+    who = reference_heading(SHIPPED, result["role"]).removeprefix("shipped (").removesuffix(")")
+    return f"random and the reference ({who}) both return {value} on these episodes, so there is no scale"
+
+
+# ------------------------------------------------------------------ against the leaderboard
+
+
+def shortfall(result: dict[str, Any]) -> list[str]:
+    """What a score lacks against a full row of the leaderboard: conditions of the paper not
+    scored, fewer episodes per member than :data:`LEADERBOARD_EPISODES`; empty for a full row."""
+    scored = [c for c in CONDITIONS if c in result["conditions"]]
+    out = []
+    if len(scored) < len(CONDITIONS):
+        out.append(f"{len(scored)} of {len(CONDITIONS)} conditions ({', '.join(scored)})")
+    if result["episodes"] < LEADERBOARD_EPISODES:
+        out.append(f"{result['episodes']} episodes per member, not {LEADERBOARD_EPISODES}")
+    return out
+
+
+def leaderboard_entry(who: str, result: dict[str, Any]) -> dict[str, Any]:
+    """What :data:`LEADERBOARD` keeps of a row: its name, settings and aggregate."""
+    agg = result["aggregate"]
+    return {
+        "who": who,
+        "role": result["role"],
+        "population": result["population"],
+        "episodes": result["episodes"],
+        "seed": result["seed"],
+        "conditions": [c for c in CONDITIONS if c in result["conditions"]],
+        "aggregate": {k: agg[k] for k in ("iqm", "ci", "conditions", "undefined")},
+    }
+
+
+def _comparable(result: dict[str, Any], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    entry = leaderboard_entry("", result)
+    keys = ("role", "population", "episodes", "seed", "conditions")
+    return [r for r in rows if all(r[k] == entry[k] for k in keys) and r["aggregate"]["iqm"] is not None]
+
+
+def _nearest(result: dict[str, Any], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Of the comparable rows, the nearest at or below the result's aggregate and the nearest above."""
+    mine = result["aggregate"]["iqm"]
+    same = sorted(_comparable(result, rows), key=lambda r: r["aggregate"]["iqm"])
+    below = [r for r in same if r["aggregate"]["iqm"] <= mine][-1:]
+    above = [r for r in same if r["aggregate"]["iqm"] > mine][:1]
+    return below + above
+
+
+def _placed_rows(result: dict[str, Any], rows: list[dict[str, Any]] | None = None) -> list[tuple[str, str, bool]]:
+    """(who, aggregate text, is it this score) of the nearest rows and this score, by aggregate."""
+    rows = leaderboard_rows() if rows is None else rows
+    near = _nearest(result, rows)
+    placed = [(r["who"], aggregate_text(r["aggregate"]), False, r["aggregate"]["iqm"]) for r in near]
+    placed.append(("this score", aggregate_text(result["aggregate"]), True, result["aggregate"]["iqm"]))
+    placed.sort(key=lambda p: (p[3], p[2]))  # a row level with this score before it
+    return [p[:3] for p in placed]
+
+
+def leaderboard_rows() -> list[dict[str, Any]]:
+    """The leaderboard's rows (:data:`LEADERBOARD`)."""
+    rows: list[dict[str, Any]] = json.loads(LEADERBOARD.read_text())["rows"]
+    return rows
+
+
+def standing(result: dict[str, Any], rows: list[dict[str, Any]] | None = None) -> list[str]:
+    """Where ``result`` stands on the leaderboard (``rows``, by default :data:`LEADERBOARD`'s):
+    a line naming the settings and then the nearest rows at the same settings (role, population,
+    episodes, seed, conditions) with this score among them, by aggregate; or one line saying why
+    it is not comparable (what differs, and what would make it so)."""
+    rows = leaderboard_rows() if rows is None else rows
+    role = result["role"]
+    if result["aggregate"]["iqm"] is None:
+        return ["no aggregate to place on the leaderboard: no condition has a normalized score"]
+    mine = _comparable(result, rows)
+    lacks = shortfall(result)
+    if mine:
+        n = len(result["conditions"])
+        partial = f", partial († like these rows: {'; '.join(lacks)})" if lacks else ""
+        placed = [
+            f"the leaderboard's nearest {role} rows at these settings (population {result['population']}, "
+            f"{result['episodes']} episodes per member, seed {result['seed']}, "
+            f"{'all ' if n == len(CONDITIONS) else ''}{n} conditions{partial}), by aggregate; rows are not ranked "
+            "(docs/leaderboard.md):"
+        ]
+        width = max(len(who) for who, _, _ in _placed_rows(result, rows))
+        placed += [f"  {'>' if me else ' '} {who:{width}s}  {text}" for who, text, me in _placed_rows(result, rows)]
+        return placed
+    theirs = [r for r in rows if r["role"] == role]
+    if not theirs:
+        return [f"not comparable with the leaderboard: it has no {role} rows"]
+    why, flags = [], []
+    populations = sorted({r["population"] for r in theirs})
+    if result["population"] not in populations:
+        why.append(f"population {result['population']}, where its {role} rows play {', '.join(populations)}")
+        flags.append(f"--population {populations[0]}")
+    if result["episodes"] != LEADERBOARD_EPISODES:
+        fewer = " (partial, †)" if result["episodes"] < LEADERBOARD_EPISODES else ""
+        why.append(f"{result['episodes']} episodes per member, its rows {LEADERBOARD_EPISODES}{fewer}")
+        flags.append(f"--episodes {LEADERBOARD_EPISODES}")
+    if result["seed"] != LEADERBOARD_SEED:
+        why.append(f"seed {result['seed']}, its rows {LEADERBOARD_SEED} (the same episodes for every row)")
+        flags.append(f"--seed {LEADERBOARD_SEED}")
+    conditions = leaderboard_entry("", result)["conditions"]
+    if conditions not in [r["conditions"] for r in theirs]:
+        n = len(conditions)
+        why.append(f"{n} of {len(CONDITIONS)} conditions, on which no row was scored (partial, †)")
+        flags.append("--conditions all")
+    if not why:
+        why.append("no row at its settings has an aggregate")
+    rerun = f"; {' '.join(flags)} would place it" if flags else ""
+    return [f"not comparable with the leaderboard (docs/leaderboard.md): {'; '.join(why)}{rerun}"]
 
 
 def dumps(result: dict[str, Any]) -> str:
