@@ -469,6 +469,11 @@ def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byt
     page = (ROOT / "docs" / "leaderboard.md").read_text()
     assert leaderboard.render(page) == page
     assert score.LEADERBOARD.read_text() == leaderboard.summary()  # the rows score places a result among
+    # the tables first, the method after them (issue 67): the first section is the results, and
+    # the rows start within the page's first screen
+    headings = [line for line in page.splitlines() if line.startswith("## ")]
+    assert headings[0] == "## Results" and page.index("| agent |") < page.index("## What a score is")
+    assert page[: page.index("| agent |")].count("\n") < 40
     assert f"--episodes {leaderboard.EPISODES} " in page.partition("## How to submit a result")[2]
     rows = json.loads((ROOT / "results" / "score" / "rows.json").read_text())
     for row in rows:
