@@ -147,3 +147,24 @@ def test_torch_passes_are_made_per_part() -> None:
         dqn.DECISIVE_GAP = gap
     with_parts = learner.decisive_q(obs, 0, parts)  # decided rows: the compiled pass, as without parts
     np.testing.assert_array_equal(with_parts.argmax(-1), learner.decisive_q(obs, 0).argmax(-1))
+
+
+def test_more_parts_than_a_world_keeps_apart_are_played_in_worlds_of_their_own() -> None:
+    """With walls to keep apart (``contain``) a world holds at most MAX_BLOCKS parts: more are
+    split across worlds, and each part still plays as it does alone."""
+    from pursuit_bench.env.world import MAX_BLOCKS
+    from pursuit_bench.rules.policies import FleeingPrey
+
+    def team(rule: type) -> dict:
+        return {"predator_0": ScriptedAgent("predator_0", rule()), "prey_0": ScriptedAgent("prey_0", FleeingPrey())}
+
+    options = {"wall_rule": "contain"}
+    variants = [(team(AlwaysChase if k % 2 else AlwaysStalk), {}) for k in range(MAX_BLOCKS + 3)]
+    played = play_variants(
+        "1p-high", variants, 3, seed=8, num_envs=2, task_options=options, parts=list(range(len(variants)))
+    )
+    for k in (0, 1, MAX_BLOCKS + 1, MAX_BLOCKS + 2):
+        alone = play_variants("1p-high", [variants[k]], 3, seed=8, num_envs=2, task_options=options)[0]
+        np.testing.assert_array_equal(played[k].returns, alone.returns)
+        np.testing.assert_array_equal(played[k].lengths, alone.lengths)
+    assert not np.array_equal(played[0].returns, played[1].returns)

@@ -17,7 +17,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from pursuit_bench.agents.kinds import HierarchicalPredator, LearningAgent, ScriptedAgent
-from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.env.conditions import CONDITIONS, resolve_condition
 from pursuit_bench.env.perturbations import Perturbations, PerturbedEnv
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.env.world import MAX_BLOCKS, Backend
@@ -243,7 +243,8 @@ def play_variants(
     if labels.shape != (len(variants),) or np.any(np.diff(labels) < 0):
         raise ValueError(f"parts={parts!r}: expected one label per variant, in non-decreasing order")
     options = dict(task_options or {})
-    static = options.get("wall_rule", CONDITIONS[condition].wall_rule) == "contain" or bool(options.get("obstacles"))
+    task = resolve_condition(condition, **options)
+    static = task.wall_rule == "contain" or task.obstacles > 0
     if static and len(np.unique(labels)) > MAX_BLOCKS:  # one world keeps that many parts' walls apart
         begins = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])
         cut = int(begins[MAX_BLOCKS])
