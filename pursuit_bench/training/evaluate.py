@@ -265,16 +265,30 @@ def play_variants(
     following = playing + arenas  # the episode it starts next (reserved: its start is set ahead)
     handed = np.full(count, 2 * arenas)  # per variant, the next episode not yet reserved
     # every episode's start drawn once, for all the variants that play it: what an arena reset
-    # with the episode's seed draws (the first arenas are reset so; the others queue theirs)
-    firsts = [env.core.first_start(np.random.default_rng(episode_seed(seed, e))) for e in range(episodes)]
-    starts = np.array([layout for layout, _ in firsts]).reshape(episodes, env.n_agents, 2)
-    placed = np.array([around for _, around in firsts]).reshape(episodes, env.config.obstacles, 3)
+    # with the episode's seed draws (the first arenas are reset so; the others queue theirs),
+    # kept until every variant has queued it
     obs, _ = env.reset(seed=[episode_seed(seed, int(e)) for e in playing])
+    drawn: dict[int, tuple[np.ndarray, np.ndarray, int]] = {}
+    idle_start = env.core.first_start(np.random.default_rng(episode_seed(seed, 0)))
+
+    def start_of(e: int) -> tuple[np.ndarray, np.ndarray]:
+        if e >= episodes:  # an idle arena (its variant's episodes all handed out) replays episode 0's start, unheard
+            return idle_start
+        if e not in drawn:
+            drawn[e] = (*env.core.first_start(np.random.default_rng(episode_seed(seed, e))), count)
+        layout, around, left = drawn[e]
+        if left == 1:
+            del drawn[e]
+        else:
+            drawn[e] = (layout, around, left - 1)
+        return layout, around
 
     def queue(rows: np.ndarray) -> None:
-        if len(rows):  # an idle arena (its variant's episodes all handed out) replays episode 0's start, unheard
-            ahead = np.where(following[rows] < episodes, following[rows], 0)
-            env.queue_starts(rows, starts[ahead], placed[ahead] if env.config.obstacles else None)
+        if len(rows):
+            chosen = [start_of(e) for e in following[rows].tolist()]
+            layouts = np.array([layout for layout, _ in chosen])
+            around = np.array([a for _, a in chosen]) if env.config.obstacles else None
+            env.queue_starts(rows, layouts, around)
 
     queue(np.arange(n))
     # per agent: rows grouped by actor (one forward pass or call each), and each row's ε (0: greedy)
