@@ -16,10 +16,22 @@ import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "studies" / "budget"
-sys.path.insert(0, str(STUDY))
 
-import design  # noqa: E402
-import run as driver  # noqa: E402
+
+def _driver() -> Any:
+    """studies/budget/run.py as a module of its own name (other studies have a ``run.py`` too)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("budget_run", STUDY / "run.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["budget_run"] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+driver = _driver()
+design = driver.design
 
 from pursuit_bench.study import rule_study  # noqa: E402
 from pursuit_bench.training import runs  # noqa: E402
