@@ -35,7 +35,7 @@ def test_the_eta_leaves_out_the_start_up_and_says_when_it_is_a_floor(monkeypatch
     # at 300: 700 left at the last tenth's 8 a second (87.5 s; the window's first point is an episode
     # early), a floor, for the tenth before ran at 64
     floor, seconds = eta(300)
-    assert floor and 85 <= seconds <= 87 and "(episodes lengthening)" in lines[300], lines[300]
+    assert floor and 85 <= seconds <= 87 and "(a lower bound while episodes lengthen" in lines[300], lines[300]
     # at 500: steady at 8 a second, 500 left
     assert eta(500) == (False, 62), lines[500]
 
