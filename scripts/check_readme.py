@@ -27,6 +27,8 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 SEEDS = ROOT / "results" / "readme" / "main-job.json"
 VARIANTS = ("trained", "always_chase", "always_stalk")
@@ -110,8 +112,9 @@ def rule_study_summary() -> dict[str, Any]:
 def answer() -> dict[str, Any]:
     """The counts the README's answer quotes, from the committed results: per row of its table
     (panels, rule ahead, equivalent, not resolved, rule behind), the panels judged and the
-    conditions still running (the rule study's seed rule applied), and per kind the panels where
-    its runs fail significantly more often (reliability, Holm)."""
+    conditions still running (the rule study's seed rule applied), per kind the panels where
+    its runs fail significantly more often (reliability, Holm), and per budget before the last
+    the primary measure's "rule helps" and "flat better" counts (each budget its own Holm family)."""
     from pursuit_bench.env.conditions import CONDITIONS
     from pursuit_bench.study import report, statistics
 
@@ -146,7 +149,19 @@ def answer() -> dict[str, Any]:
         "running_panels": sum(CONDITIONS[c].n_predators for c in CONDITIONS if c not in judged),
         "fail_more": fail_more,
         "failure_margin": summary["failure_margin"],
+        "by_budget": [
+            (b["episodes"], b["counts"]["rule helps"], b["counts"]["flat better"])
+            for b in summary["secondary"]["budgets"]
+        ],
+        "head_start_weights": _trapezoid_weights(summary["budgets"]),
     }
+
+
+def _trapezoid_weights(budgets: list[int]) -> list[float]:
+    """Each budget's share of the head start's average (trapezoids on a log-episode axis over the
+    span, as ``rule_report.head_start``): the weights sum to 1."""
+    gaps = np.diff(np.log(budgets)) / (np.log(budgets[-1]) - np.log(budgets[0]))
+    return [float(w) for w in (np.concatenate([gaps, [0.0]]) + np.concatenate([[0.0], gaps])) / 2]
 
 
 def answer_table(counts: dict[str, Any]) -> str:
@@ -185,13 +200,21 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
     so_far = "" if not waiting else " so far"
     behind = "none" if head[4] == 0 else str(head[4])
     fail = counts["fail_more"]
+    budgets = counts["by_budget"]
+    at = _listed([f"{helps} at {_episodes(e)}" for e, helps, _ in budgets])
+    flat_at = _listed([str(flat) for _, _, flat in budgets])
+    early = budgets[:2]
+    weight = sum(counts["head_start_weights"][: len(early)])
     sentences = [
         f"**On the primary measure, fixed before the runs, the rule helps in {primary[1]} of the {judged} "
         f"panels judged{so_far}, the flat learner is better in {primary[4]}, {primary[2]} are equivalent "
         f"within ±0.05 and {primary[3]} are not resolved.**",
-        f"The rule's clearest effect is a head start (secondary): averaged over {counts['budgets']['first']}–"
-        f"{counts['budgets']['last']:,} episodes, the return is significantly higher with the rule in "
-        f"{head[1]} of the {judged} panels and lower in {behind}.",
+        f"The rule gives a head start (secondary) that shrinks with training: on the primary measure at the "
+        f"earlier budgets (each its own Holm family) it helps in {at} episodes, and the flat learner is "
+        f"better in {flat_at}; averaged over {counts['budgets']['first']}–{counts['budgets']['last']:,} "
+        f"episodes on a log-episode axis, which puts {weight * 100:.0f} % of its weight on "
+        f"{_listed([_episodes(e) for e, _, _ in early])} episodes, the return is "
+        f"significantly higher with the rule in {head[1]} of the {judged} panels and lower in {behind}.",
         f"Reliability (secondary), a result of its own, depends on where failure is drawn: at "
         f"{abs(counts['failure_margin']):.2f} below the better fixed mode put in a run's place (the line "
         f"fixed before the runs) the flat learner's runs fail significantly more often in "
@@ -210,6 +233,18 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
             f"can fall as the family grows to {counts['all_panels']}).",
         )
     return sentences
+
+
+def _episodes(episodes: int) -> str:
+    """``1500``, ``5000``, ``10,500``: a budget as the prose writes it (a comma from five digits)."""
+    return f"{episodes:,}" if episodes >= 10_000 else str(episodes)
+
+
+def _listed(items: list[str]) -> str:
+    """``a, b, c and d``; ``a``; ``none`` for none."""
+    if not items:
+        return "none"
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} and {items[-1]}"
 
 
 def _wrapped(text: str) -> str:

@@ -37,11 +37,15 @@ def test_the_population_is_disjoint_from_the_judged_runs_and_holds_no_twins() ->
 
 
 def test_the_committed_populations_follow_the_design() -> None:
-    """Whatever population the study has committed: the members the design names, each file's
-    header saying the seed, kind and condition it claims; no two members with the same weights."""
+    """The population the study committed, in every one of the ten conditions: the members the
+    design names, each file's header saying the seed, kind and condition it claims; no two members
+    with the same weights."""
     where = ROOT / "pursuit_bench" / "pretrained" / "populations" / rule_study.POPULATION
-    for folder in sorted(p for p in where.glob("*") if (p / "population.json").exists()):
+    for condition in CONDITIONS:
+        folder = where / condition
+        assert (folder / "population.json").is_file(), f"no population in {condition}"
         members = rule_study.read_population(folder)
+        assert len(members) == 9, condition
         seen: list[np.ndarray] = []
         for member in members:
             if member["policy"] is not None:
