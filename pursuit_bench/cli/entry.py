@@ -23,6 +23,7 @@ EXTRA_OF: dict[str, tuple[str, str]] = {
     "safetensors": ("safetensors", "train"),
     "threadpoolctl": ("threadpoolctl", "train"),
     "ray": ("ray", "ray"),
+    "tensorboard": ("tensorboard", "tensorboard"),
 }
 
 

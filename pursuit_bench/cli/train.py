@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from pursuit_bench.training.train_config import TrainConfig
 
 #: Options that only say how this process runs: free to differ when a run is resumed.
-RUNTIME_OPTIONS = {"out", "resume", "force", "no_record", "threads", "log_every", "episodes"}
+RUNTIME_OPTIONS = {"out", "resume", "force", "no_record", "threads", "log_every", "episodes", "tensorboard"}
 
 
 def _options_given(ctx: click.Context) -> set[str]:
@@ -165,6 +165,15 @@ def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: fl
     show_default=True,
     help="Update the predators' networks in one stacked pass (same result, faster) or one by one.",
 )
+@click.option(
+    "--tensorboard",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Also write each episode's scalars (returns, losses, ε, β, chase fractions, length, captured) "
+    "as TensorBoard event files in DIR/<run folder's name>: tensorboard --logdir DIR. Needs the "
+    "tensorboard extra.",
+    metavar="DIR",
+)
 @threads_option
 @training_options
 @click.pass_context
@@ -190,6 +199,7 @@ def train(
     checkpoint_every: int,
     threads: int,
     log_every: int,
+    tensorboard: Path | None,
     **hyperparameters: Any,
 ) -> None:
     """Train every agent of a condition together (independent learners) into a run folder.
@@ -199,6 +209,8 @@ def train(
     from pursuit_bench.training.train_config import TrainConfig
 
     every = recording_every(no_record, record_every)
+    if tensorboard is not None:  # a missing extra is said before any work (cli/entry.py's message)
+        import tensorboard as _  # noqa: F401
     if resume and force:
         raise BadInput("--resume and --force contradict each other: pick one")
     out = out or Path("runs") / (
@@ -244,7 +256,16 @@ def train(
             torch.set_num_threads(threads)
             if note:
                 click.echo(f"{out}: {note}", err=True)
-            _train_run(out, config, settings, state, signals, record=not no_record, log_every=log_every)
+            _train_run(
+                out,
+                config,
+                settings,
+                state,
+                signals,
+                record=not no_record,
+                log_every=log_every,
+                tensorboard=None if tensorboard is None else tensorboard / out.resolve().name,
+            )
     except runs.RunBusy as error:
         raise BadInput(str(error)) from None
     except BaseException:
@@ -262,9 +283,12 @@ def _train_run(
     *,
     record: bool,
     log_every: int,
+    tensorboard: Path | None = None,
 ) -> None:
-    """Train (the folder ready and locked) until done or a signal, showing progress."""
+    """Train (the folder ready and locked) until done or a signal, showing progress (and writing
+    TensorBoard's event files in ``tensorboard`` when given)."""
     from pursuit_bench.training.stack import FolderRun, train_stack
+    from pursuit_bench.training.tensorboard_log import TensorBoardLog
 
     run = FolderRun(out, config, settings, state)
     if run.episodes_done >= config.episodes:
@@ -276,8 +300,11 @@ def _train_run(
     returns: dict[str, list[float]] = {name: [] for name in names}
     captures: list[bool] = []
     last: dict[str, Any] = {"done": run.episodes_done, "epsilon": 0.0}
+    board = None if tensorboard is None else TensorBoardLog(tensorboard, run.episodes_done)
 
     def on_episode(_: int, episode: EpisodeRecord) -> None:
+        if board is not None:
+            board.write(episode)
         for name in names:
             returns[name].append(episode.returns[name])
         captures.append(episode.captured)
@@ -292,7 +319,11 @@ def _train_run(
         every_episodes=log_every,
         eta=True,
     )
-    train_stack([run], record=record, should_stop=lambda: signals.signum is not None, on_episode=on_episode)
+    try:
+        train_stack([run], record=record, should_stop=lambda: signals.signum is not None, on_episode=on_episode)
+    finally:
+        if board is not None:
+            board.close()
     progress.close()
     if signals.signum is not None:
         stopped = Stopped(signals.signum)
@@ -306,3 +337,5 @@ def _train_run(
     click.echo(f"  metrics: {out / 'metrics.jsonl'}   checkpoint: {out / 'checkpoint.pt'}")
     if record:
         click.echo(f"  recordings: pursuit-bench view {out}")
+    if tensorboard is not None:
+        click.echo(f"  TensorBoard: tensorboard --logdir {tensorboard.parent}")
