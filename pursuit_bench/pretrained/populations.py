@@ -53,8 +53,10 @@ RULE_STUDY = "rule-study"
 """The rule study's population of prey (issue 47), the predator role's population once committed."""
 PROVISIONAL = {"predator": "provisional-predators", "prey": "provisional-prey"}
 """The provisional population of each role (of opponents), built by :func:`build_provisional`."""
-#: The budget for every shipped population together (tests/test_score.py checks it).
-SIZE_BUDGET_BYTES = 15 * 1024 * 1024
+#: The budget for every shipped population together (tests/test_score.py checks it): 15 MiB until
+#: the budget study's populations (issue 63: 3 conditions × 5 budgets of 9 members, about 2 MiB a
+#: condition) came; 20 MiB holds them beside the 11.5 MiB shipped before.
+SIZE_BUDGET_BYTES = 20 * 1024 * 1024
 
 
 #: The scripted policies a member may name: the role each plays, and the policy.
