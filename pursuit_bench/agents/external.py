@@ -10,9 +10,10 @@ The agent protocol: an object with
 - optionally ``act_batch(observations) -> actions`` for a stack (B, 6n - 2), returning (B, 2)
   for a predator or (B,) for the prey; used instead of ``act`` when present (faster).
 
-The factory, ``MODULE:FACTORY``, is a callable taking no argument that returns such an object
-(a few lines around a Stable-Baselines3 model, say: README). An external agent acts as it is:
-the ε = 0.1 the paper gives a learned prey during evaluation is applied to our own agents only.
+The factory, ``MODULE:FACTORY``, is a callable taking no argument that returns such an object.
+A Stable-Baselines3 model needs none: ``NAME=MODEL.zip`` loads its policy (``sb3_model.py``).
+An external agent acts as it is: the ε = 0.1 the paper gives a learned prey during evaluation is
+applied to our own agents only.
 """
 
 from __future__ import annotations
@@ -25,9 +26,14 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench.agents import sb3_model
+
 
 def load_factory(spec: str) -> Callable[[], Any]:
-    """The callable ``MODULE:FACTORY`` names; ValueError saying what is wrong."""
+    """The callable ``MODULE:FACTORY`` names, or for a Stable-Baselines3 model file (``PATH.zip``)
+    one that loads its policy (``agents/sb3_model.py``); ValueError saying what is wrong."""
+    if sb3_model.is_model_path(spec):
+        return sb3_model.make_factory(spec)
     module_name, _, attribute = spec.partition(":")
     if not module_name or not attribute:
         raise ValueError(f"{spec!r}: expected MODULE:FACTORY, e.g. my_agents:make_predator")
@@ -110,5 +116,7 @@ def replaced(agents: dict[str, Any], specs: dict[str, str]) -> dict[str, Any]:
             made = factory()
         except Exception as error:
             raise ValueError(f"--agent {name}={spec}: the factory raised {type(error).__name__}: {error}") from None
+        if isinstance(made, sb3_model.SB3Policy):
+            made.check_role(predator=name != names[-1])
         out[name] = ExternalAgent(name, made, spec, predator=name != names[-1])
     return out

@@ -52,7 +52,8 @@ from pursuit_bench.training import runs
     multiple=True,
     metavar="NAME=MODULE:FACTORY",
     help="Replace agent NAME (predator_0, …, prey_0) by the object MODULE:FACTORY() returns, with act(observation) "
-    "(pursuit_bench/agents/external.py), and evaluate it like a trained one. Repeatable.",
+    "(pursuit_bench/agents/external.py), or by a Stable-Baselines3 model trained on the single-agent view "
+    "(NAME=MODEL.zip, any algorithm), and evaluate it like a trained one. Repeatable.",
 )
 @click.option(
     "--perturb",
@@ -193,7 +194,9 @@ def _agent_specs(values: tuple[str, ...]) -> dict[str, str]:
     for value in values:
         name, _, spec = value.partition("=")
         if not name or not spec:
-            raise BadInput(f"--agent {value!r}: expected NAME=MODULE:FACTORY, e.g. predator_0=my_agents:make")
+            raise BadInput(
+                f"--agent {value!r}: expected NAME=MODULE:FACTORY or NAME=MODEL.zip, e.g. predator_0=my_agents:make"
+            )
         if name in specs:
             raise BadInput(f"--agent {name}: given twice")
         specs[name] = spec

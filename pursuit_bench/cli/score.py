@@ -41,9 +41,10 @@ def score(
     out: Path,
     threads: int,
 ) -> None:
-    """Score AGENT (MODULE:FACTORY, a run folder, pretrained[:CONDITION], or a reference: random,
-    always-chase, always-stalk, pure-pursuit, FleeingPrey) in --role against every member of each
-    condition's population of the other role, on the same episodes, beside the reference agents.
+    """Score AGENT (MODULE:FACTORY, a Stable-Baselines3 MODEL.zip, a run folder, pretrained[:CONDITION],
+    or a reference: random, always-chase, always-stalk, pure-pursuit, FleeingPrey) in --role against
+    every member of each condition's population of the other role, on the same episodes, beside the
+    reference agents.
     The agent fills every slot of its role. Writes score.json and score.md into --out, both
     complete or neither."""
     chosen = names(conditions, list(CONDITIONS), "conditions")

@@ -31,7 +31,7 @@ import numpy as np
 from scipy import stats
 
 from pursuit_bench import pretrained
-from pursuit_bench.agents import external
+from pursuit_bench.agents import external, sb3_model
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.task import obs_size
@@ -116,6 +116,9 @@ class Contestant:
     trained_in: str | None = None
     """The condition its agents were trained in (a run, one condition's shipped agents): their
     observations have that condition's size, so it plays only conditions with as many agents."""
+    observes: int | None = None
+    """The observation size it takes, where that is all that is known of where it was trained
+    (a Stable-Baselines3 model)."""
 
 
 def _agent_weights(agents: dict[str, Any]) -> set[str]:
@@ -201,6 +204,8 @@ def resolve(spec: str, role: str) -> Contestant:
             copies=False,
             trained_in=source,
         )
+    if sb3_model.is_model_path(spec):
+        return _sb3(spec, role)
     folder = Path(spec)
     if (folder / "config.json").is_file():
         return _run_folder(folder, role)
@@ -257,6 +262,26 @@ def _module(spec: str, role: str) -> Contestant:
     return Contestant(spec, f"{spec} (an agent module)", role, make)
 
 
+def _sb3(spec: str, role: str) -> Contestant:
+    """A Stable-Baselines3 model (``PATH.zip``) in every slot of ``role``: one policy, loaded once,
+    playing the conditions whose observations have the size it was trained on."""
+    policy = sb3_model.SB3Policy(spec)
+    policy.check_role(predator=role == "predator")
+
+    def make(condition: str, seed: int) -> dict[str, Any]:
+        return {
+            name: external.ExternalAgent(name, policy, spec, predator=role == "predator")
+            for name in slots(condition, role)
+        }
+
+    def can_play(condition: str) -> bool:
+        return obs_size(len(CONDITIONS[condition].agent_names)) == policy.observes
+
+    return Contestant(
+        spec, f"{spec} (a Stable-Baselines3 model)", role, make, can_play=can_play, observes=policy.observes
+    )
+
+
 def _observes(condition: str, role: str) -> str:
     """What an agent of ``role`` observes in ``condition``, in words: how many, of what size."""
     n = len(CONDITIONS[condition].agent_names)
@@ -271,11 +296,15 @@ def cannot_play(contestant: Contestant, conditions: list[str] | tuple[str, ...])
     size as trained, and what each condition expects."""
     cannot = [c for c in conditions if not contestant.can_play(c)]
     text = f"{contestant.label} cannot play {', '.join(cannot)}"
-    if contestant.trained_in is None:
+    if contestant.trained_in is None and contestant.observes is None:
         return text
     expected: dict[str, list[str]] = {}
     for condition in cannot:
         expected.setdefault(_observes(condition, contestant.role), []).append(condition)
+    if contestant.trained_in is None:
+        return f"{text}: it observes {contestant.observes} numbers; expected " + "; ".join(
+            f"{what} in {', '.join(where)}" for what, where in expected.items()
+        )
     return (
         f"{text}: its {'prey was' if contestant.role == 'prey' else 'predators were'} trained in "
         f"{contestant.trained_in}, as "
