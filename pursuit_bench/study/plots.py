@@ -151,7 +151,7 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
                 ax = bottom if label == "capture_rate" else top
                 name = label.removeprefix("return/")
                 color = "black" if label == "capture_rate" else agent_color(name)
-                ax.plot(x, series["mean"], styles.get(kind, ":"), color=color, lw=1.2)
+                ax.plot(x, series["mean"], styles.get(kind, ":"), color=color, **_marks(name, len(x)))
                 if series["ci"] is not None:
                     ax.fill_between(x, series["ci"][0], series["ci"][1], color=color, alpha=0.15, lw=0)
         top.set_title(condition, fontsize=9)
@@ -165,20 +165,25 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
         axes[2 * (j // columns)][j % columns].set_visible(False)
         axes[2 * (j // columns) + 1][j % columns].set_visible(False)
     per_kind = {kind: max(c[kind]["seeds"] for c in curves.values() if kind in c) for kind in kinds}
+    blocks = _block_words(curves)
     if len(set(per_kind.values())) > 1:
         counts = ", ".join(f"{kind} {n}" for kind, n in per_kind.items())
-        heading = f"Learning curves: mean over seeds ({counts}), 95 % t-interval over seeds"
+        heading = f"Learning curves ({blocks}): mean over seeds ({counts}), 95 % t-interval over seeds"
     elif seeds > 1:
-        heading = f"Learning curves: mean over {seeds} seeds, {interval_words(seeds)}"
+        heading = f"Learning curves ({blocks}): mean over {seeds} seeds, {interval_words(seeds)}"
     else:
-        heading = "Learning curves of one run (block means of the training episodes)"
+        heading = f"Learning curves of one run ({blocks})"
     if len(kinds) > 1:
         heading += "\n" + ", ".join(
             f"{'solid' if k == 'hierarchical' else 'dashed'}: {k}" for k in kinds if k in styles
         )
     fig.suptitle(heading, fontsize=10)
     names = sorted({k.removeprefix("return/") for c in curves.values() for v in c.values() for k in v["series"]})
-    handles = [matplotlib.lines.Line2D([], [], color=agent_color(n), label=n) for n in names if n != "capture_rate"]
+    handles = [
+        matplotlib.lines.Line2D([], [], color=agent_color(n), label=n, **_marks(n, 1))
+        for n in names
+        if n != "capture_rate"
+    ]
     handles += [matplotlib.lines.Line2D([], [], color="black", label="capture rate")]
     if len(kinds) > 1:  # the line style says the predators' kind (the prey's too: it trained against them)
         handles += [
@@ -187,6 +192,43 @@ def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=8, frameon=False)
     fig.tight_layout(rect=(0, 0.35 / fig.get_figheight(), 1, 1))  # the legend's row at the bottom
     return _png(fig)
+
+
+def _marks(name: str, points: int) -> dict[str, Any]:
+    """How an agent's line is drawn: predator_0 widest, each later predator narrower (drawn over
+    it) and with markers at points of its own: with a shared reward the predators' returns nearly
+    coincide, and a line under another still shows at its edges. The prey and the capture rate
+    plainly."""
+    if not name.startswith("predator_"):
+        return {"lw": 1.2}
+    k = int(name.rsplit("_", 1)[-1])
+    if k == 0:
+        return {"lw": 2.6}
+    every = max(1, points // 10)
+    return {
+        "lw": max(0.7, 2.6 - 0.9 * k),
+        "marker": "os^D"[(k - 1) % 4],
+        "ms": 3.5,
+        "markevery": ((k - 1) * every // 2 % every, every),
+    }
+
+
+def _block_words(curves: dict[str, dict[str, Any]]) -> str:
+    """The block the curves' points are means of, in words: "block means of 100 episodes" (the
+    spacing of the points, which sit at the blocks' middles; the largest where they differ)."""
+    steps = {
+        round(float(s))
+        for c in curves.values()
+        for curve in c.values()
+        for s in np.diff(np.asarray(curve["episodes"], dtype=float))
+    }
+    if not steps:
+        return "block means of the training episodes"
+    if steps == {1}:
+        return "one point per episode"
+    if len(steps) == 1:
+        return f"block means of {steps.pop():,} episodes"
+    return f"block means of up to {max(steps):,} episodes"
 
 
 def agent_color(name: str) -> Any:
@@ -275,7 +317,13 @@ def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
     top.set_ylabel("P(chase)")
     top.set_ylim(-0.02, 1.02)
     top.legend(fontsize=8)
-    top.set_title(title, fontsize=10)
+    over_seeds = any(curve.get("ci") is not None for curve in curves.values())
+    band = (
+        "band: 95 % t-interval over seeds, kept in [0, 1]"
+        if over_seeds
+        else "band: Wilson's 95 % interval, the bin's states taken as independent (so too narrow)"
+    )
+    top.set_title(f"{title}\n{band}", fontsize=9)
     bottom.set_ylabel("states")
     bottom.set_xlabel("distance to the prey")
     fig.tight_layout()
