@@ -211,8 +211,9 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
         f"within ±0.05 and {primary[3]} are not resolved.**",
         f"The rule gives a head start (secondary) that shrinks with training: by the primary test repeated at "
         f"the earlier budgets (secondary; each budget its own Holm family; no test of the trend) the rule is "
-        f"ahead in {at} episodes, and the flat learner in {flat_at}; averaged over {counts['budgets']['first']}–{counts['budgets']['last']:,} "
-        f"episodes on a log-episode axis, which puts {weight * 100:.0f} % of its weight on "
+        f"ahead in {at} episodes, and the flat learner in {flat_at}; averaged over "
+        f"{counts['budgets']['first']}–{counts['budgets']['last']:,} episodes on a log-episode axis, which puts "
+        f"{weight * 100:.0f} % of its weight on "
         f"{_listed([_episodes(e) for e, _, _ in early])} episodes, the return is "
         f"significantly higher with the rule in {head[1]} of the {judged} panels and lower in {behind}.",
         f"Reliability (secondary), a result of its own, depends on where failure is drawn: at "
