@@ -54,3 +54,9 @@ def test_modes_png_says_what_its_band_is() -> None:
     seeds = {"2 predators": {**one_run["predator_0"], "ci": [[0.8, 0.4, 0.1, None, 0.0], [1.0, 0.6, 0.3, None, 0.1]]}}
     assert "Wilson's 95 % interval" in _titles(lambda: plots.modes_png(one_run, "t"))[0]
     assert "95 % t-interval over seeds" in _titles(lambda: plots.modes_png(seeds, "t"))[0]
+
+
+def test_an_outside_agent_s_bar_is_labelled_by_its_spec_s_last_part() -> None:
+    assert plots._bar_label("external (/tmp/x/runs/ppo_predator.zip)") == "external\nppo_predator.zip"
+    assert plots._bar_label("external (my_agents:make)") == "external\nmy_agents:make"
+    assert plots._bar_label("hierarchical") == "hierarchical"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+from pathlib import Path
 from typing import Any
 
 import matplotlib
@@ -22,7 +23,7 @@ def reward_bars_png(result: dict[str, Any], run: str | None = None) -> bytes:
     kind; always chase; always stalk), each with its standard error; the title names the run
     (``run``, or the shipped agents' condition and seed) and the evaluation."""
     panels = result["panels"]
-    bars = (("trained", result.get("predator_kind", "trained"), TRAINED_COLOR), *BASELINES)
+    bars = (("trained", _bar_label(result.get("predator_kind", "trained")), TRAINED_COLOR), *BASELINES)
     width = max(3.2 * len(panels) + 0.8, 5.2)  # room for the two-line title over one panel
     fig, axes = plt.subplots(1, len(panels), figsize=(width, 3.6), squeeze=False, sharey=True)
     low = min(min(p[k] - p["stderr"][k] for k, _, _ in bars) for p in panels)
@@ -229,6 +230,15 @@ def _block_words(curves: dict[str, dict[str, Any]]) -> str:
     if len(steps) == 1:
         return f"block means of {steps.pop():,} episodes"
     return f"block means of up to {max(steps):,} episodes"
+
+
+def _bar_label(kind: str) -> str:
+    """The trained bar's label: an outside agent's spec by its last part, on a line of its own
+    (``external (/long/path/model.zip)`` as ``external`` over ``model.zip``), so the tick fits."""
+    head, bracket, spec = kind.partition(" (")
+    if not bracket:
+        return kind
+    return f"{head}\n{Path(spec.removesuffix(')')).name}"
 
 
 def agent_color(name: str) -> Any:
