@@ -38,6 +38,13 @@ from pursuit_bench.training import runs
 )
 @click.option("--num-envs", type=click.IntRange(min=1), default=64, show_default=True, help="Arenas stepped together.")
 @click.option("--no-record", is_flag=True, help="Write no Rerun recording of the evaluated episodes.")
+@click.option(
+    "--csv",
+    "csv",
+    is_flag=True,
+    help="Also write eval.csv: the trained variant's trajectories, a row per agent and step (position, "
+    "velocity, mode, reward, wall, captured; units in the column names: docs/use.md).",
+)
 @obstacles_option
 @threads_option
 @click.option(
@@ -80,6 +87,7 @@ def evaluate(
     seed: int,
     num_envs: int,
     no_record: bool,
+    csv: bool,
     obstacles: int | None,
     threads: int,
     tag: str | None,
@@ -108,7 +116,13 @@ def evaluate(
         parts = [*specs, *([f"perturb-{perturbations.tag}"] if perturbations.changed else [])]
         parts += [f"vs-{Path(opponents.replace(':', '-')).name}"] if opponents is not None else []
         tag = "-".join(parts) or None
-    settings: dict[str, Any] = {"episodes": episodes, "seed": seed, "num_envs": num_envs, "record": not no_record}
+    settings: dict[str, Any] = {
+        "episodes": episodes,
+        "seed": seed,
+        "num_envs": num_envs,
+        "record": not no_record,
+        "csv": csv,
+    }
     settings["perturbations"] = perturbations
     try:
         paths = runs.eval_paths(folder, tag)
@@ -281,3 +295,5 @@ def _evaluate_run(
     click.echo(f"capture rate {result['capture_rate']:.1%}{protocol}; results in {paths['json']} and {paths['png']}")
     if settings["record"]:
         click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")
+    if settings["csv"]:
+        click.echo(f"trajectories: {paths['csv']}")

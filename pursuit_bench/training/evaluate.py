@@ -24,8 +24,9 @@ from pursuit_bench.env.world import MAX_BLOCKS, Backend
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.training import runs
-from pursuit_bench.training.recording import EpisodeTraces, Recorder
+from pursuit_bench.training.recording import EpisodeSink, EpisodeTraces, Recorder, Sinks
 from pursuit_bench.training.train_config import TrainConfig
+from pursuit_bench.training.trajectory_csv import TrajectoryCSV
 
 #: Draws an evaluation's figure: ``figure(result, run name) -> PNG bytes`` (the command line
 #: passes ``study.plots.reward_bars_png``; this layer draws nothing itself).
@@ -68,7 +69,7 @@ def run_episodes(
     num_envs: int = 16,
     epsilons: dict[str, float] | None = None,
     backend: Backend = "pymunk",
-    recorder: Recorder | None = None,
+    recorder: EpisodeSink | None = None,
     record: Callable[[int], bool] = lambda episode: True,
     on_step: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], None] | None = None,
     check: Callable[[], None] = lambda: None,
@@ -217,7 +218,7 @@ def play_variants(
     seed: int,
     num_envs: int = 64,
     backend: Backend = "pymunk",
-    recorder: Recorder | None = None,
+    recorder: EpisodeSink | None = None,
     check: Callable[[], None] = lambda: None,
     task_options: Mapping[str, Any] | None = None,
     parts: list[int] | None = None,
@@ -448,7 +449,7 @@ def evaluate_agents(
     seed: int,
     prey_epsilon: float | None = 0.1,
     num_envs: int = 64,
-    recorder: Recorder | None = None,
+    recorder: EpisodeSink | None = None,
     backend: Backend = "pymunk",
     predator_kind: str | None = None,
     check: Callable[[], None] = lambda: None,
@@ -489,7 +490,7 @@ def evaluate_agents(
     if crn:  # every variant in one batch of arenas, with common random numbers
         options = {**(task_options or {}), **(perturbations or Perturbations()).task_options()}
 
-        def batch(chosen: list[Variant], rec: Recorder | None = None) -> list[Episodes]:
+        def batch(chosen: list[Variant], rec: EpisodeSink | None = None) -> list[Episodes]:
             return play_variants(
                 condition, chosen, episodes, seed=seed, num_envs=num_envs, backend=backend, recorder=rec,
                 check=check, task_options=options,
@@ -688,6 +689,7 @@ def evaluate_into(
     predator_kind: str | None = None,
     perturbations: Perturbations | None = None,
     figure: Figure | None = None,
+    csv: bool = False,
 ) -> dict[str, Any]:
     """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
     (with ``about`` and the training config), its ``figure`` (if given) and a recording to ``paths``
@@ -696,13 +698,18 @@ def evaluate_into(
     called before every step and once more before the files are put in place: an exception it
     raises stops the evaluation with the previous files untouched. ``predator_kind`` names the
     predators in the result (default: the config's); ``perturbations`` change the world and the
-    senses of every variant alike (:mod:`pursuit_bench.env.perturbations`)."""
+    senses of every variant alike (:mod:`pursuit_bench.env.perturbations`); with ``csv``, the
+    trained variant's trajectories go to ``paths["csv"]`` as well (``training/trajectory_csv.py``)."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
-    recorder = None
+    recorder: EpisodeSink | None = None
     try:
+        sinks: list[EpisodeSink] = []
         if record:
             described = {"condition": config.condition, "evaluation": True, **config.to_dict()}
-            recorder = Recorder(partial["rrd"], list(agents), described)
+            sinks.append(Recorder(partial["rrd"], list(agents), described))
+        if csv:
+            sinks.append(TrajectoryCSV(partial["csv"], list(agents)))
+        recorder = sinks[0] if len(sinks) == 1 else Sinks(*sinks) if sinks else None
         result = evaluate_agents(
             config.condition,
             agents,  # type: ignore[arg-type]
@@ -721,11 +728,13 @@ def evaluate_into(
             atomic_write_bytes(partial["png"], figure(result, paths["json"].parent.name))
         atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
         check()  # the last point at which the previous results stay as they were
-        for kind in ("rrd", "png", "json"):  # eval.json last: it says the set is complete
+        for kind in ("rrd", "csv", "png", "json"):  # eval.json last: it says the set is complete
             if partial[kind].exists():
                 os.replace(partial[kind], paths[kind])
-        if recorder is None:
+        if not record:
             paths["rrd"].unlink(missing_ok=True)  # an older recording would not match
+        if not csv:
+            paths["csv"].unlink(missing_ok=True)  # nor older trajectories
         if figure is None:
             paths["png"].unlink(missing_ok=True)  # nor an older figure
     except BaseException:

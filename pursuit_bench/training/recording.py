@@ -30,7 +30,7 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import pyarrow as pa
@@ -244,6 +244,30 @@ def default_blueprint() -> rrb.Blueprint:
         rrb.BlueprintPanel(state="collapsed"),
         rrb.SelectionPanel(state="collapsed"),
     )
+
+
+class EpisodeSink(Protocol):
+    """What hears an evaluation's episodes: a :class:`Recorder`, a trajectory file
+    (``training/trajectory_csv.py``) or several (:class:`Sinks`)."""
+
+    def log_episode(self, episode: int, trace: EpisodeTrace) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class Sinks:
+    """Several sinks heard as one: each episode goes to every one, in order."""
+
+    def __init__(self, *sinks: EpisodeSink) -> None:
+        self.sinks = sinks
+
+    def log_episode(self, episode: int, trace: EpisodeTrace) -> None:
+        for sink in self.sinks:
+            sink.log_episode(episode, trace)
+
+    def close(self) -> None:
+        for sink in self.sinks:
+            sink.close()
 
 
 class Recorder:

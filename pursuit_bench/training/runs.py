@@ -35,11 +35,11 @@ _TAG = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 
 def eval_paths(folder: Path, tag: str | None = None) -> dict[str, Path]:
-    """``{"json", "png", "rrd"}``: ``eval.*``, or ``eval-TAG.*`` with a tag."""
+    """``{"json", "png", "rrd", "csv"}``: ``eval.*``, or ``eval-TAG.*`` with a tag."""
     if tag is not None and not _TAG.fullmatch(tag):
         raise ValueError(f"tag={tag!r}: expected letters, digits, '_', '-' or '.' (not first)")
     stem = "eval" if tag is None else f"eval-{tag}"
-    return {kind: folder / f"{stem}.{kind}" for kind in ("json", "png", "rrd")}
+    return {kind: folder / f"{stem}.{kind}" for kind in ("json", "png", "rrd", "csv")}
 
 
 def holds_only_unstarted_or_nothing(folder: Path) -> bool:
