@@ -24,6 +24,7 @@ EXTRA_OF: dict[str, tuple[str, str]] = {
     "threadpoolctl": ("threadpoolctl", "train"),
     "ray": ("ray", "ray"),
     "tensorboard": ("tensorboard", "tensorboard"),
+    "movement": ("movement", "animals"),
 }
 
 

@@ -45,6 +45,13 @@ from pursuit_bench.training import runs
     help="Also write eval.csv: the trained variant's trajectories, a row per agent and step (position, "
     "velocity, mode, reward, wall, captured; units in the column names: docs/use.md).",
 )
+@click.option(
+    "--tracks",
+    "tracks",
+    is_flag=True,
+    help="Also write eval-tracks/: the trained variant's episodes as movement datasets (netCDF, one file "
+    "per episode; the animal-tracking toolbox's format: docs/pursuit-law.md). Needs the animals extra.",
+)
 @obstacles_option
 @threads_option
 @click.option(
@@ -88,6 +95,7 @@ def evaluate(
     num_envs: int,
     no_record: bool,
     csv: bool,
+    tracks: bool,
     obstacles: int | None,
     threads: int,
     tag: str | None,
@@ -100,6 +108,8 @@ def evaluate(
 
     The three files appear together when the evaluation is complete: Ctrl-C or SIGTERM leaves
     the previous ones as they were (exit 130 or 143)."""
+    if tracks:  # a missing extra is said before any work (cli/entry.py's message)
+        import movement  # noqa: F401
     folder = run_or_pretrained(run, pretrained, out)
     if pretrained is None:
         check_run_folder(folder)  # before numba and torch load: a refusal comes at once
@@ -122,6 +132,7 @@ def evaluate(
         "num_envs": num_envs,
         "record": not no_record,
         "csv": csv,
+        "tracks": tracks,
     }
     settings["perturbations"] = perturbations
     try:
@@ -297,3 +308,5 @@ def _evaluate_run(
         click.echo(f"recording: {paths['rrd']}   (pursuit-bench view {paths['rrd']})")
     if settings["csv"]:
         click.echo(f"trajectories: {paths['csv']}")
+    if settings["tracks"]:
+        click.echo(f"movement datasets: {paths['tracks']}/ (xarray.open_dataset reads each)")

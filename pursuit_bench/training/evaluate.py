@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import json
 import os
+import shutil
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +25,7 @@ from pursuit_bench.env.world import MAX_BLOCKS, Backend
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.training import runs
+from pursuit_bench.training.movement_tracks import MovementTracks
 from pursuit_bench.training.recording import EpisodeSink, EpisodeTraces, Recorder, Sinks
 from pursuit_bench.training.train_config import TrainConfig
 from pursuit_bench.training.trajectory_csv import TrajectoryCSV
@@ -690,6 +692,7 @@ def evaluate_into(
     perturbations: Perturbations | None = None,
     figure: Figure | None = None,
     csv: bool = False,
+    tracks: bool = False,
 ) -> dict[str, Any]:
     """Evaluate ``agents``, trained by ``config``, by the paper's protocol and write the result
     (with ``about`` and the training config), its ``figure`` (if given) and a recording to ``paths``
@@ -699,7 +702,8 @@ def evaluate_into(
     raises stops the evaluation with the previous files untouched. ``predator_kind`` names the
     predators in the result (default: the config's); ``perturbations`` change the world and the
     senses of every variant alike (:mod:`pursuit_bench.env.perturbations`); with ``csv``, the
-    trained variant's trajectories go to ``paths["csv"]`` as well (``training/trajectory_csv.py``)."""
+    trained variant's trajectories go to ``paths["csv"]`` as well (``training/trajectory_csv.py``);
+    with ``tracks``, to the folder ``paths["tracks"]`` as movement datasets (``training/movement_tracks.py``)."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder: EpisodeSink | None = None
     try:
@@ -709,6 +713,8 @@ def evaluate_into(
             sinks.append(Recorder(partial["rrd"], list(agents), described))
         if csv:
             sinks.append(TrajectoryCSV(partial["csv"], list(agents)))
+        if tracks:
+            sinks.append(MovementTracks(partial["tracks"], list(agents), config.condition))
         recorder = sinks[0] if len(sinks) == 1 else Sinks(*sinks) if sinks else None
         result = evaluate_agents(
             config.condition,
@@ -728,6 +734,13 @@ def evaluate_into(
             atomic_write_bytes(partial["png"], figure(result, paths["json"].parent.name))
         atomic_write_text(partial["json"], json.dumps(result, indent=2) + "\n")
         check()  # the last point at which the previous results stay as they were
+        if partial["tracks"].exists():  # a folder: the old one moved aside, the new one in, the old removed
+            old = paths["tracks"].with_name(f".{paths['tracks'].name}.old")
+            shutil.rmtree(old, ignore_errors=True)
+            if paths["tracks"].exists():
+                os.replace(paths["tracks"], old)
+            os.replace(partial["tracks"], paths["tracks"])
+            shutil.rmtree(old, ignore_errors=True)
         for kind in ("rrd", "csv", "png", "json"):  # eval.json last: it says the set is complete
             if partial[kind].exists():
                 os.replace(partial[kind], paths[kind])
@@ -735,12 +748,17 @@ def evaluate_into(
             paths["rrd"].unlink(missing_ok=True)  # an older recording would not match
         if not csv:
             paths["csv"].unlink(missing_ok=True)  # nor older trajectories
+        if not tracks:
+            shutil.rmtree(paths["tracks"], ignore_errors=True)
         if figure is None:
             paths["png"].unlink(missing_ok=True)  # nor an older figure
     except BaseException:
         if recorder is not None:
             recorder.close()
-        for path in partial.values():
-            path.unlink(missing_ok=True)
+        for kind, path in partial.items():
+            if kind == "tracks":
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink(missing_ok=True)
         raise
     return result

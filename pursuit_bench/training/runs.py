@@ -35,11 +35,14 @@ _TAG = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 
 def eval_paths(folder: Path, tag: str | None = None) -> dict[str, Path]:
-    """``{"json", "png", "rrd", "csv"}``: ``eval.*``, or ``eval-TAG.*`` with a tag."""
+    """``{"json", "png", "rrd", "csv"}``: ``eval.*``, or ``eval-TAG.*`` with a tag; ``"tracks"``:
+    the folder ``eval-tracks`` (``eval-TAG-tracks``)."""
     if tag is not None and not _TAG.fullmatch(tag):
         raise ValueError(f"tag={tag!r}: expected letters, digits, '_', '-' or '.' (not first)")
     stem = "eval" if tag is None else f"eval-{tag}"
-    return {kind: folder / f"{stem}.{kind}" for kind in ("json", "png", "rrd", "csv")}
+    return {kind: folder / f"{stem}.{kind}" for kind in ("json", "png", "rrd", "csv")} | {
+        "tracks": folder / f"{stem}-tracks"
+    }
 
 
 def holds_only_unstarted_or_nothing(folder: Path) -> bool:
