@@ -59,9 +59,12 @@ def rollout_digest(condition: str, seed: int, steps: int) -> str:
 def test_same_seed_same_1000_steps_in_two_envs_and_two_processes() -> None:
     here = rollout_digest("3p-high-shared", 7, 1000)
     assert here == rollout_digest("3p-high-shared", 7, 1000)
-    code = "from tests.test_env_api import rollout_digest; print(rollout_digest('3p-high-shared', 7, 1000))"
-    root = Path(__file__).resolve().parent.parent
-    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=root)
+    # imported by its file's folder, not as ``tests.…``: sleap-io (movement's dependency) installs a
+    # top-level package named ``tests`` that would be found first
+    code = "from test_env_api import rollout_digest; print(rollout_digest('3p-high-shared', 7, 1000))"
+    here_folder = Path(__file__).resolve().parent
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(here_folder), os.environ.get("PYTHONPATH", "")])}
+    other = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
     assert other.stdout.strip() == here
     assert here != rollout_digest("3p-high-shared", 8, 1000)
 

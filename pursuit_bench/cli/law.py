@@ -26,6 +26,23 @@ from pursuit_bench.cli.options import (
 @click.option("--episodes", type=click.IntRange(min=1), default=20, show_default=True, help="Episodes to play per run.")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seeds the episodes.")
 @obstacles_option
+@click.option(
+    "--tracks",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Fit the laws to tracked animals instead: a movement poses dataset (netCDF), or with "
+    "--source-software any file movement's loaders read; with --pursuer and --target. Writes law-tracks.json "
+    "beside it, or into --out. Needs the animals extra.",
+)
+@click.option("--pursuer", default=None, help="With --tracks: the individual that pursues.")
+@click.option("--target", default=None, help="With --tracks: the individual pursued.")
+@click.option(
+    "--source-software",
+    default=None,
+    help="With --tracks: the tracker that wrote the file (DeepLabCut, SLEAP, LightningPose, …: movement's "
+    "load_dataset names), for files that are not movement's netCDF.",
+)
+@click.option("--fps", type=click.FloatRange(min=0, min_open=True), default=None, help="With --tracks: its frame rate.")
 @threads_option
 def law(
     folder: Path | None,
@@ -34,6 +51,11 @@ def law(
     episodes: int,
     seed: int,
     obstacles: int | None,
+    tracks: Path | None,
+    pursuer: str | None,
+    target: str | None,
+    source_software: str | None,
+    fps: float | None,
     threads: int,
 ) -> None:
     """Fit five laws (none, proportional pursuit, proportional navigation, mixed, parallel
@@ -42,6 +64,11 @@ def law(
     beside the scripted predators in their places: law.json and law.png. On a SWEEP: every
     evaluated run (without the scripted references), summarised per condition and kind over
     seeds."""
+    if tracks is not None:
+        if folder is not None or pretrained is not None:
+            raise BadInput("--tracks fits a tracked dataset: give it without a RUN or --pretrained")
+        _law_tracks(tracks, pursuer, target, source_software, fps, out, seed)
+        return
     where = run_or_pretrained(folder, pretrained, out)
     if pretrained is None and (where / "sweep.json").is_file():
         _law_sweep(where, episodes, seed, threads)
@@ -67,6 +94,56 @@ def law(
         for predator, fits in predators.items():
             click.echo(f"{kind} {predator}: {_line(fits)}")
     click.echo(f"written: law.json, law.png in {where}")
+
+
+def _law_tracks(
+    path: Path,
+    pursuer: str | None,
+    target: str | None,
+    source_software: str | None,
+    fps: float | None,
+    out: Path | None,
+    seed: int,
+) -> None:
+    """law --tracks: the laws fitted to a tracked pursuer and target (study/tracked_laws.py)."""
+    if pursuer is None or target is None:
+        raise BadInput("--tracks needs --pursuer NAME and --target NAME (individuals of the dataset)")
+    if not path.is_file():
+        raise BadInput(f"--tracks {path}: no such file")
+    import movement  # noqa: F401  # a missing extra is said in one line (cli/entry.py)
+
+    from pursuit_bench.io import tracks as tracks_io
+    from pursuit_bench.io.files import atomic_write_text
+    from pursuit_bench.study import tracked_laws
+
+    try:
+        if source_software is None:
+            dataset = tracks_io.read(path)
+        else:
+            from movement.io import load_dataset
+
+            try:
+                dataset = load_dataset(path, source_software=source_software, fps=fps)
+            except Exception as error:  # the loader's own refusal, in one line
+                raise ValueError(f"{path}: movement's {source_software} loader refuses it ({error})") from None
+        result = tracked_laws.fit_tracks(dataset, pursuer, target, seed)
+    except ValueError as error:
+        raise BadInput(f"--tracks {path}: {error}") from None
+    where = out or path.parent
+    where.mkdir(parents=True, exist_ok=True)
+    result["tracks"] = str(path)
+    atomic_write_text(where / "law-tracks.json", json.dumps(result) + "\n")
+    if result["resampled_to_s"] is not None:
+        click.echo(f"resampled from one sample every {result['sampled_every_s']:g} s to the env's 0.1 s (linear)")
+    gaps = len(result["stretches"]) - 1
+    click.echo(
+        f"{pursuer} → {target}: {len(result['stretches'])} stretch{'es' if gaps else ''} without a gap "
+        f"({gaps} gap{'s' if gaps != 1 else ''} split the track), {result['pieces']} pieces of at most "
+        f"{result['piece_samples']} samples fitted"
+    )
+    attacks = result["attacks"]
+    shares = ", ".join(f"{name} {share:.0%}" for name, share in attacks["share"].items() if share)
+    click.echo(f"chosen by BIC: {shares}; written: {where / 'law-tracks.json'}")
 
 
 def _line(fits: dict[str, Any]) -> str:

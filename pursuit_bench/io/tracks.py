@@ -60,13 +60,14 @@ def read(path: Path) -> Any:
 
     try:
         dataset = xr.load_dataset(path)
-    except (OSError, ValueError) as error:
-        raise ValueError(f"{path}: not a netCDF dataset ({error})") from None
+    except (OSError, ValueError) as error:  # xarray's message runs over lines: its first says it
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise ValueError(f"not a netCDF dataset ({first.removeprefix(str(path)).strip(': ')})") from None
     missing = [d for d in ("time", "space", "individuals") if d not in dataset.dims] + (
         [] if "position" in dataset else ["position"]
     )
     if missing:
-        raise ValueError(f"{path}: not a movement poses dataset (no {', '.join(missing)})")
+        raise ValueError(f"not a movement poses dataset (no {', '.join(missing)})")
     try:
         ValidPosesInputs(
             position_array=dataset["position"].transpose("time", "space", "keypoints", "individuals").values,
@@ -77,5 +78,5 @@ def read(path: Path) -> Any:
             source_software=dataset.attrs.get("source_software"),
         )
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{path}: movement's validator refuses it ({error})") from None
+        raise ValueError(f"movement's validator refuses it ({' '.join(str(error).split())})") from None
     return dataset
