@@ -83,11 +83,16 @@ def main() -> None:
         "attacks": attacks,
     }
     out.write_text(json.dumps(document, indent=2) + "\n")
-    header = "| true \\ chosen | " + " | ".join(guidance.LAWS) + " |"
-    print(header)
-    print("|---|" + "---:|" * len(guidance.LAWS))
-    for name, row in confusion.items():
-        print(f"| {name} | " + " | ".join(str(row[law]) for law in guidance.LAWS) + " |")
+    print(confusion_table(confusion))
+
+
+def confusion_table(confusion: dict[str, dict[str, int]]) -> str:
+    """The confusion matrix as docs/pursuit-law.md prints it (true law by row, chosen by column)."""
+    lines = ["| true \\ chosen | " + " | ".join(guidance.LAWS) + " |", "|---|" + "---:|" * len(guidance.LAWS)]
+    lines += [
+        f"| {name} | " + " | ".join(str(row[law]) for law in guidance.LAWS) + " |" for name, row in confusion.items()
+    ]
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":
