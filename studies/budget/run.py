@@ -33,6 +33,7 @@ import shutil
 import signal
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -106,8 +107,9 @@ def check_build(work: Path, current: dict[str, str], pinned: dict[str, str]) -> 
         path.write_text(json.dumps(current, indent=2) + "\n")
 
 
-def sweep(work: Path, folder: Path, plan: Any, workers: int, stop: list[bool]) -> bool:
-    """Train ``plan``'s runs in ``folder`` (resuming what is there); whether all are done."""
+def sweep(work: Path, folder: Path, plan: Any, workers: int, stop: list[bool], finished: Any = None) -> bool:
+    """Train ``plan``'s runs in ``folder`` (resuming what is there); whether all are done.
+    ``finished(name)`` is called as each run ends (the driver stores a population member then)."""
     from pursuit_bench.training.sweep import open_sweep, run_sweep
 
     note = open_sweep(folder, plan)
@@ -119,6 +121,8 @@ def sweep(work: Path, folder: Path, plan: Any, workers: int, stop: list[bool]) -
     def heard(kind: str, name: str, value: Any) -> None:
         if kind == "done":
             log(work, f"trained {name}")
+            if finished is not None:
+                finished(name)
         elif kind == "episode":
             if not episodes[name]:
                 log(work, f"{name}: training from episode {value}")
@@ -182,7 +186,7 @@ def population_check(work: Path, condition: str, kind: str, run: Path, committed
     """SystemExit unless the run's prey at its first part's end equals the committed member's."""
     from pursuit_bench.training import runs
 
-    member = f"{kind}-seed{run.name.rsplit('seed', 1)[1]}"
+    member = member_name(run.name)
     equal, differs = design.prey_equals_committed(run, runs.CHECKPOINT, condition, member, committed)
     if not equal:
         log(work, f"{run.name}: prey at 15,000 episodes differs from the committed {member} ({differs[:3]}): stopped")
@@ -215,27 +219,82 @@ def replay_check(args: Any, condition: str, run: Path) -> None:
     log(args.work, f"{run.name}: replayed at {budget} episodes, the rule study's committed result to the bit")
 
 
+def member_folder(args: Any, condition: str, member: str, budget: int) -> Path:
+    """Where a population member's prey at one budget is stored (the population's own folder)."""
+    return args.populations / design.population_name(budget) / condition / member
+
+
+def stored(args: Any, condition: str, member: str) -> bool:
+    """Whether a member's prey is stored at every budget (by this machine or committed by an
+    earlier one: a member is stored as its run ends, so a new machine trains on only the rest)."""
+    return all((member_folder(args, condition, member, b) / "prey_0.safetensors").is_file() for b in args.budgets)
+
+
+def member_name(run_name: str) -> str:
+    """A population run's member: ``3p-low-shared-flat-seed1004`` -> ``flat-seed1004``."""
+    kind = next(k for k in design.KINDS if f"-{k}-seed" in run_name)
+    return f"{kind}-seed{run_name.rsplit('seed', 1)[1]}"
+
+
+def gather(on: Path, tag: str, folder: Path, names: list[str]) -> None:
+    """Move each of ``names``' run folders found in another continuation sweep of ``tag`` (an
+    earlier subset, on this machine) into ``folder``'s: a run folder holds all it resumes from."""
+    for name in names:
+        if (folder / "runs" / name).exists():
+            continue
+        for other in sorted(on.glob(f"{tag}*/runs/{name}")):
+            os.replace(other, folder / "runs" / name)
+            break
+
+
 def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> bool:
-    """One sweep's runs through both parts; whether they are done."""
+    """One sweep's runs through both parts; whether they are done. In the population stage a
+    run whose member is stored at every budget is not trained on again: the continuation is a
+    plan of the rest (the smallest run of seeds holding them; its runs train one after another,
+    each from its own step, so they are the runs the whole plan trains)."""
+    import dataclasses
+
     trial = args.trial
     tag = f"{stage}-{kind}-{condition}" if stage == "population" else f"judged-{condition}"
     on_plan = design.continuation_plan(stage, condition, kind, args.budgets, args.judged_seeds, **trial)
     on = args.work / "on" / tag
+    finished: Callable[[str], None] | None = None
+    if stage == "population":
+        rest = [s for s in design.population_seeds(kind) if not stored(args, condition, f"{kind}-seed{s}")]
+        if not rest:
+            log(args.work, f"{tag}: every member stored at every budget in {args.populations}: not trained again")
+            return True
+        if len(rest) < on_plan.seeds:
+            on_plan = dataclasses.replace(on_plan, first_seed=rest[0], seeds=rest[-1] - rest[0] + 1)
+            on = args.work / "on" / f"{tag}-from-seed{rest[0]}"
+            log(args.work, f"{tag}: members of seeds {rest[0]}–{rest[-1]} to train; the others are stored")
+
+        def store(name: str) -> None:
+            store_member(args, condition, on / "runs" / name)
+
+        finished = store
+
     names = sorted(on_plan.runs())
     if all(trained(on / "runs" / n, on_plan.episodes) for n in names):
+        for name in names if finished is not None else ():
+            store_member(args, condition, on / "runs" / name)
         return True
     first_plan = design.first_part(stage, condition, kind, args.budgets, args.rule_keep, **trial)
     first = args.work / "first" / tag
+    from pursuit_bench.training.sweep import open_sweep
+
+    if on.exists():
+        (on / "runs").mkdir(exist_ok=True)
+        gather(args.work / "on", tag, on, names)
     waiting = [n for n in names if not trained(on / "runs" / n, args.budgets[0])]
     if waiting:
         log(args.work, f"{tag}: first {args.budgets[0]} episodes by the rule study's plan ({len(waiting)} runs)")
         if not sweep(args.work, first, first_plan, args.workers, stop):
             return False
-        from pursuit_bench.training.sweep import open_sweep
-
         open_sweep(on, on_plan)  # the plan first: a sweep's folder holds its plan before its runs
         (on / "runs").mkdir(parents=True, exist_ok=True)
-        for name in waiting:
+        gather(args.work / "on", tag, on, names)
+        for name in [n for n in names if not trained(on / "runs" / n, args.budgets[0])]:
             if stop[0]:
                 return False
             if stage == "population" and not args.no_population_check:
@@ -244,55 +303,71 @@ def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> 
                 replay_check(args, condition, first / "runs" / name)
             carry_on(first / "runs" / name, on, on_plan, name)
     log(args.work, f"{tag}: on to {on_plan.episodes} episodes, checkpoints kept at {list(on_plan.keep_checkpoints)}")
-    return sweep(args.work, on, on_plan, args.workers, stop)
+    done = sweep(args.work, on, on_plan, args.workers, stop, finished)
+    for name in names if finished is not None else ():
+        if trained(on / "runs" / name, on_plan.episodes):
+            store_member(args, condition, on / "runs" / name)  # heard of before a stop, or trained earlier
+    return done
+
+
+def store_member(args: Any, condition: str, run: Path) -> None:
+    """Write a finished population run's prey at every budget into its populations' folders
+    (``<populations>/<name>/<condition>/<member>/prey_0.safetensors``, weights only), each
+    written beside and renamed into place; a member already stored is left as it is."""
+    from pursuit_bench import pretrained
+    from pursuit_bench.training import runs
+
+    member = member_name(run.name)
+    if stored(args, condition, member):
+        return
+    for budget in args.budgets:
+        folder = member_folder(args, condition, member, budget)
+        if (folder / "prey_0.safetensors").is_file():
+            continue
+        checkpoint = runs.CHECKPOINT if budget == args.budgets[-1] else runs.milestone_checkpoint(budget)
+        config, agents, about = runs.described(run, checkpoint)
+        if about["trained_episodes"] != budget:
+            raise SystemExit(f"{run}/{checkpoint}: {about['trained_episodes']} episodes, expected {budget}")
+        name = design.population_name(budget)
+        provenance = {"population": name, "member": member, "build": args.build["commit"]}
+        scratch = folder.parent / f".{member}.tmp"
+        shutil.rmtree(scratch, ignore_errors=True)
+        written = pretrained.export(
+            {"prey_0": agents["prey_0"]}, config, scratch / ".export", trained_episodes=budget, provenance=provenance
+        )[0]
+        os.replace(written, scratch / "prey_0.safetensors")
+        shutil.rmtree(scratch / ".export")
+        if folder.exists():
+            shutil.rmtree(folder)  # a member folder without its weights: an older, partial one
+        os.replace(scratch, folder)
+    log(args.work, f"{condition}/{member}: stored at every budget in {args.populations}")
 
 
 def write_populations(args: Any, condition: str) -> None:
-    """Each budget's population of ``condition`` (FleeingPrey and the 8 learned prey at that
-    budget) under ``--populations/<name>/<condition>/``, in the population format."""
-    from pursuit_bench import pretrained
+    """Each budget's ``population.json`` of ``condition`` (FleeingPrey and the 8 learned prey,
+    stored as their runs ended), in the population format, once every member is stored."""
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.training import runs
 
     for budget in args.budgets:
         name = design.population_name(budget)
         folder = args.populations / name / condition
         if (folder / "population.json").exists():
             continue
-        scratch = args.populations / name / f".{condition}.tmp"
-        if scratch.exists():
-            shutil.rmtree(scratch)
-        scratch.mkdir(parents=True)
         entries = []
         for member in design.members(condition):
             files: dict[str, str] = {}
             trained_as = None
             if member["policy"] is None:
-                run = args.work / "on" / f"population-{member['kind']}-{condition}" / "runs"
-                run = run / design.run_name(condition, member["kind"], member["seed"])
-                checkpoint = runs.CHECKPOINT if budget == args.budgets[-1] else runs.milestone_checkpoint(budget)
-                config, agents, about = runs.described(run, checkpoint)
-                if about["trained_episodes"] != budget:
-                    raise SystemExit(f"{run}/{checkpoint}: {about['trained_episodes']} episodes, expected {budget}")
+                if not (member_folder(args, condition, member["name"], budget) / "prey_0.safetensors").is_file():
+                    raise SystemExit(f"{folder}: member {member['name']} is not stored")
                 trained_as = {
                     "preset": args.trial.get("preset", design.PRESET),
                     "episodes": budget,
                     "predator_kind": member["kind"],
                     "build": args.build["commit"],
                 }
-                provenance = {"population": name, "member": member["name"], "build": args.build["commit"]}
-                written = pretrained.export(
-                    {"prey_0": agents["prey_0"]},
-                    config,
-                    scratch / ".export",
-                    trained_episodes=budget,
-                    provenance=provenance,
-                )[0]
-                (scratch / member["name"]).mkdir()
-                os.replace(written, scratch / member["name"] / "prey_0.safetensors")
                 files = {"prey_0": f"{member['name']}/prey_0.safetensors"}
             entries.append({**member, "trained": trained_as, "files": files})
-        shutil.rmtree(scratch / ".export", ignore_errors=True)
         document = {
             "population": name,
             "condition": condition,
@@ -300,8 +375,7 @@ def write_populations(args: Any, condition: str) -> None:
             "provisional": False,
             "members": entries,
         }
-        atomic_write_text(scratch / "population.json", json.dumps(document, indent=2) + "\n")
-        os.replace(scratch, folder)
+        atomic_write_text(folder / "population.json", json.dumps(document, indent=2) + "\n")
         log(args.work, f"population {name} of {condition} written to {folder}")
 
 
@@ -343,7 +417,13 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--work", type=Path, default=WORK, help="Run folders, progress.log, the lock.")
-    parser.add_argument("--populations", type=Path, default=None, help="Default: --work/populations.")
+    parser.add_argument(
+        "--populations",
+        type=Path,
+        default=None,
+        help="Where members are stored and populations written (the study's: the package's populations "
+        "folder of this checkout, to be committed). Default: --work/populations.",
+    )
     parser.add_argument("--conditions", default=",".join(design.CONDITIONS))
     parser.add_argument("--stages", default=",".join(STAGES), help="population, judged or both, in that order.")
     parser.add_argument("--budgets", default=None, help="(trying the driver only) e.g. 4,8,12")
