@@ -5,7 +5,9 @@ on by the driver to a longer budget, equals the same run trained in one go, bit 
 from __future__ import annotations
 
 import json
+import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -208,6 +210,39 @@ def test_the_driver_stopped_by_sigterm_resumes_to_the_same_runs_and_populations(
     for path in written:
         twin = tmp_path / "b" / path.relative_to(tmp_path / "a")
         ours, theirs = pretrained.read(path)[0], pretrained.read(twin)[0]
+        assert set(ours) == set(theirs) and all(torch.equal(ours[k], theirs[k]) for k in ours), path
+
+
+@pytest.mark.slow
+@pytest.mark.long
+def test_a_new_machine_trains_only_the_members_not_stored(tmp_path: Path) -> None:
+    """A new machine (a work folder of its own) given the populations an earlier one stored, less
+    one member: it trains on only that member's run, and stores it and writes each budget's
+    population as the earlier machine did (the same tensors and header; population.json to the
+    byte)."""
+    from pursuit_bench import pretrained
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    first = subprocess.run(driver_command(tmp_path / "a"), env=env, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr
+    shutil.copytree(tmp_path / "a" / "populations", tmp_path / "b" / "populations")
+    for folder in (tmp_path / "b" / "populations").glob("*/3p-low-shared"):
+        shutil.rmtree(folder / "flat-seed1006")
+        (folder / "population.json").unlink()
+    command = [*driver_command(tmp_path / "b"), "--populations", str(tmp_path / "b" / "populations")]
+    again = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    assert [p.name for p in (tmp_path / "b" / "on").glob("*/runs/*")] == ["3p-low-shared-flat-seed1006"]
+    assert "population-hierarchical-3p-low-shared: every member stored" in (tmp_path / "b" / "progress.log").read_text()
+    written = sorted((tmp_path / "a" / "populations").rglob("*.*"))
+    assert len(written) == 3 * 9
+    for path in written:
+        twin = tmp_path / "b" / path.relative_to(tmp_path / "a")
+        if path.name == "population.json":
+            assert twin.read_bytes() == path.read_bytes(), path
+            continue
+        (ours, header), (theirs, their_header) = pretrained.read(path), pretrained.read(twin)
+        assert header == their_header, path  # safetensors orders its header's keys as it likes
         assert set(ours) == set(theirs) and all(torch.equal(ours[k], theirs[k]) for k in ours), path
 
 
