@@ -29,10 +29,12 @@ OUT = Path(__file__).resolve().parents[1] / "results" / "speed" / "decisive-chec
 def torch_only(worst: list[float]) -> Any:
     """A decisive_q that answers torch's Q-values and notes the compiled pass's largest difference."""
 
-    def decisive_q(self: DQNLearner, obs: np.ndarray, member: int) -> np.ndarray:
-        everyone = np.zeros((self.members, *obs.shape), dtype=np.float32)
-        everyone[member] = obs
-        q = self.evaluate(everyone)[0][member]
+    def decisive_q(self: DQNLearner, obs: np.ndarray, member: int, parts: np.ndarray | None = None) -> np.ndarray:
+        # torch's pass per part, as each part's rows were batched in calls of their own
+        labels = np.zeros(len(obs), dtype=np.int64) if parts is None else np.asarray(parts)
+        starts = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]]).tolist()
+        ends = [*starts[1:], len(obs)]
+        q = np.concatenate([self._torch_q(obs[a:b], member) for a, b in zip(starts, ends, strict=True)])
         stacked = np.ascontiguousarray(obs, dtype=np.float32)[None]
         compiled_q, compiled_v = q_and_value_kernel(
             self.optimizer.flat.numpy(), self._offsets, self.n_actions, stacked, self.config.wall_features, member

@@ -204,8 +204,8 @@ def test_the_pure_pursuit_predator_is_found_to_pursue() -> None:
     """Against the shipped prey, which weaves (a prey fleeing in a straight line makes pure
     pursuit a straight line too: then ``"none"`` is chosen, rightly)."""
     agents = {**pretrained.load("1p-low"), "predator_0": ScriptedAgent("predator_0", PurePursuitPredator())}
-    fits = pursuit_laws.fit_segments(play("1p-low", agents, 20))["chase"]
-    assert fits["attacks"] >= 5 and fits["winner"] == "pp", fits["share"]
+    fits = pursuit_laws.fit_segments(play("1p-low", agents, 40))["chase"]  # 40: one attack is not 14 % of them
+    assert fits["attacks"] >= 10 and fits["winner"] == "pp", fits["share"]
     assert fits["share"]["pp"] >= 0.6, fits["share"]
 
 

@@ -382,7 +382,8 @@ def test_a_score_is_placed_among_the_leaderboard_rows_at_its_settings_or_says_wh
     assert score.standing(none) == ["no aggregate to place on the leaderboard: no condition has a normalized score"]
     text = score.markdown(chase)
     assert "## Against the leaderboard\n\nThe leaderboard's nearest predator rows" in text
-    assert "| **this score** | " in text and "| always-chase | 0.93 [0.90, 0.94] |" in text
+    row = f"| always-chase | {score.aggregate_text(chase['aggregate'])} |"  # the row is this score's file
+    assert "| **this score** | " in text and row in text
 
 
 def test_a_prey_s_reference_is_the_learned_prey_and_an_undefined_score_says_why(
@@ -394,13 +395,14 @@ def test_a_prey_s_reference_is_the_learned_prey_and_an_undefined_score_says_why(
     assert "| shipped (hierarchical) |" in score.markdown(_committed("predator-always-chase"))
     why = "random and the reference (learned prey) both return -1.000 on these episodes, so there is no scale"
     assert score.undefined_why(fleeing, "1p-low") == why and score.undefined_why(fleeing, "1p-high") is None
-    assert f"No normalized score (–): 1p-low: {why}." in text
+    assert f"No normalized score (–): 1p-low: {why}" in text
     # and in the terminal: the command's own lines, from these results
     monkeypatch.setattr(score, "score", lambda *args, **kwargs: fleeing)
     code, output = run_cli("score", "FleeingPrey", "--role", "prey", "--episodes", "20", "--out", str(tmp_path))
     assert code == 0, output
-    assert f"1p-low: return -0.850, normalized – ({why})" in output
-    assert "1p-high: return -0.912, normalized 0.41" in output
+    low, high = fleeing["conditions"]["1p-low"], fleeing["conditions"]["1p-high"]
+    assert f"1p-low: return {low['mean_return']:+.3f}, normalized – ({why})" in output
+    assert f"1p-high: return {high['mean_return']:+.3f}, normalized {high['normalized']:.2f}" in output
     assert "the leaderboard's nearest prey rows at these settings" in output and "  > this score" in output
 
 

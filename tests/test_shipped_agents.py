@@ -26,7 +26,9 @@ def test_every_condition_is_shipped_small_and_acts() -> None:
         agents = pretrained.load(condition)
         assert list(agents) == list(CONDITIONS[condition].agent_names)
         header = next(iter(pretrained.info(condition).values()))
-        assert header["preset"] == "reproduction" and "pursuit-bench sweep" in header["sweep_command"]
+        assert header["preset"] == "reproduction" and "scripts/ship_pretrained.py" in header["command"]
+        assert header["selection"].startswith("the median of the rule study's hierarchical runs of seeds 0-9")
+        assert header["replay"] == "the rule study's committed result at 15000 episodes, bit for bit"
         assert header["trained_episodes"] == header["training"]["episodes"]
         env = pursuit_bench.parallel_env(condition)
         obs, _ = env.reset(seed=0)
@@ -68,9 +70,9 @@ def test_a_non_editable_install_carries_the_weights(tmp_path: Path) -> None:
 
 
 def test_the_shipped_1p_high_predator_beats_always_chase_as_reproduction_md_says() -> None:
-    """REPRODUCTION.md: the shipped 1p-high hierarchical predator (seed 6 of the ten-seed
-    15,000-episode sweep), 300 episodes (seed 0), scores +0.40 against always-chase's −0.21 and
-    always-stalk's +0.09 (standard errors 0.02, 0.03, 0.02); we ask for leads of 0.4 and 0.2."""
+    """REPRODUCTION.md: the shipped 1p-high hierarchical predator (the rule study's seed 6, the
+    median of its seeds 0-9), 300 episodes (seed 0), scores +0.36 against always-chase's −0.30 and
+    always-stalk's +0.05 (standard errors 0.02, 0.02, 0.01); we ask for leads of 0.4 and 0.2."""
     result = evaluate_agents("1p-high", pretrained.load("1p-high"), episodes=300, seed=0)  # type: ignore[arg-type]
     (panel,) = result["panels"]
     assert panel["trained"] > panel["always_chase"] + 0.4

@@ -81,7 +81,8 @@ class Member:
     seed: int | None
     """Its run's seed (learned members)."""
     trained: dict[str, Any] | None
-    """``preset``, ``episodes``, ``predator_kind``, ``build`` (learned members)."""
+    """``preset``, ``episodes``, ``predator_kind``, ``build`` (learned members); ``condition`` where
+    it was trained in another condition than the population's (the provisional populations)."""
     files: dict[str, Path]
     """Agent name -> its weights file (learned members)."""
 
@@ -215,9 +216,9 @@ def load(name: str, condition: str, *, folder: Path | None = None) -> Population
     names = [m.name for m in members]
     if not members or len(set(names)) != len(names):
         raise _bad(index, "expected at least one member, each named once")
-    seeds = [m.seed for m in members if m.seed is not None]
-    if len(set(seeds)) != len(seeds):
-        raise _bad(index, "two members share a seed")
+    trained_runs = [((m.trained or {}).get("condition", condition), m.seed) for m in members if m.seed is not None]
+    if len(set(trained_runs)) != len(trained_runs):
+        raise _bad(index, "two members are one run (trained in the same condition with the same seed)")
     return Population(name, condition, role, data["provisional"], tuple(members))
 
 
@@ -280,6 +281,7 @@ def _shipped_member(source: str, slots: list[str], where: Path) -> dict[str, Any
             "preset": header.get("preset"),
             "episodes": int(header["trained_episodes"]),
             "predator_kind": header["training"]["predator"],
+            "condition": source,
             "build": f"pursuit-bench {header.get('version')} (the shipped agents of {source})",
         },
         "files": files,
@@ -288,8 +290,8 @@ def _shipped_member(source: str, slots: list[str], where: Path) -> dict[str, Any
 
 def build_provisional(dest: Path | None = None) -> list[Path]:
     """Write the provisional populations of every condition under ``dest`` (the package's
-    folder by default), replacing what was there; returns the ``population.json`` files. (The
-    shipped runs of conditions with as many agents have distinct seeds: :func:`load` checks it.)"""
+    folder by default), replacing what was there; returns the ``population.json`` files. (Each member is another
+    condition's shipped run, its ``trained`` entry naming that condition: two may share a seed.)"""
     root = dest or FOLDER
     written = []
     for role, name in PROVISIONAL.items():
