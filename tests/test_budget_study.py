@@ -246,6 +246,55 @@ def test_a_new_machine_trains_only_the_members_not_stored(tmp_path: Path) -> Non
         assert set(ours) == set(theirs) and all(torch.equal(ours[k], theirs[k]) for k in ours), path
 
 
+@pytest.mark.slow
+@pytest.mark.long
+def test_the_judged_stage_evaluates_each_run_as_it_ends_and_a_new_machine_trains_only_the_rest(
+    tmp_path: Path,
+) -> None:
+    """A tiny study of one condition, both stages (6 judged seeds a kind): every judged run's
+    compact result holds its evaluations at every budget against the same-budget population and
+    at the later ones against the first budget's, and the paper's comparison at the last; a new
+    machine given the populations and all results but one trains on only that run and writes
+    the same result."""
+    import gzip
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    judged = ["--stages", "population,judged", "--judged-seeds", "6", "--eval-episodes", "3", "--no-replay-check"]
+    a = tmp_path / "a"
+    first = subprocess.run([*driver_command(a), *judged], env=env, capture_output=True, text=True, timeout=1200)
+    assert first.returncode == 0, first.stderr
+    results = sorted((a / "results").glob("*.json.gz"))
+    assert [p.name for p in results] == sorted(
+        f"3p-low-shared-{kind}-seed{seed}.json.gz" for kind in design.KINDS for seed in range(6)
+    )
+    members = [m["name"] for m in design.members("3p-low-shared")]
+
+    def read(path: Path) -> dict[str, Any]:
+        return json.loads(gzip.decompress(path.read_bytes()))
+
+    for path in results:
+        result = read(path)
+        assert result["format"] == "budget-study-run-1" and result["budgets"] == [3, 150, 300]
+        assert list(result["same_budget"]) == ["3", "150", "300"] and list(result["first_population"]) == ["150", "300"]
+        for evaluations in [*result["same_budget"].values(), *result["first_population"].values()]:
+            assert list(evaluations) == members
+            assert all(set(e) == {"panels", "stderr", "capture_rate", "prey"} for e in evaluations.values())
+        assert list(result["paper"]["panels"]) == ["predator_0", "predator_1", "predator_2"]
+    b = tmp_path / "b"
+    shutil.copytree(a / "populations", b / "populations")
+    shutil.copytree(a / "results", b / "results")
+    (b / "results" / "3p-low-shared-flat-seed3.json.gz").unlink()
+    command = [*driver_command(b), *judged, "--populations", str(b / "populations")]
+    again = subprocess.run(command, env=env, capture_output=True, text=True, timeout=1200)
+    assert again.returncode == 0, again.stderr
+    assert [p.name for p in (b / "on").glob("*/runs/*")] == ["3p-low-shared-flat-seed3"]
+    ours, theirs = (
+        read(a / "results" / "3p-low-shared-flat-seed3.json.gz"),
+        read(b / "results" / "3p-low-shared-flat-seed3.json.gz"),
+    )
+    assert ours == theirs
+
+
 def test_the_replay_check_passes_the_rule_study_s_result_only_to_the_bit(tmp_path: Path, monkeypatch) -> None:
     import argparse
     import gzip

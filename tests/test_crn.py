@@ -168,3 +168,24 @@ def test_more_parts_than_a_world_keeps_apart_are_played_in_worlds_of_their_own()
         np.testing.assert_array_equal(played[k].returns, alone.returns)
         np.testing.assert_array_equal(played[k].lengths, alone.lengths)
     assert not np.array_equal(played[0].returns, played[1].returns)
+
+
+def test_the_prey_s_outcomes_are_those_of_the_trained_variant_s_episodes() -> None:
+    """``outcomes=True`` (the budget study's secondary 6) adds the prey's return, wall exits,
+    captures and survival in the trained variant's episodes and changes nothing else; its return
+    and captures are the result's own prey return and capture rate, computed apart; together and
+    alone give the same."""
+    from pursuit_bench.training.evaluate import evaluate_together
+
+    agents = pretrained.load("1p-high")
+    plain = evaluate_agents("1p-high", agents, episodes=12, seed=5, num_envs=4, prey_check=False)
+    with_outcomes = evaluate_agents("1p-high", agents, episodes=12, seed=5, num_envs=4, prey_check=False, outcomes=True)
+    outcomes = with_outcomes.pop("prey_outcomes")
+    assert with_outcomes == plain
+    assert outcomes["return"] == pytest.approx(plain["mean_return"]["prey_0"], abs=1e-12)
+    assert outcomes["captured"] == plain["capture_rate"]
+    assert 0 <= outcomes["left_area"] and outcomes["left_area"] + outcomes["captured"] + outcomes["survived"] <= 1
+    (together,) = evaluate_together(
+        "1p-high", [(agents, 0.1)], episodes=12, seed=5, num_envs=4, prey_check=False, outcomes=True
+    )
+    assert together["prey_outcomes"] == outcomes

@@ -165,42 +165,60 @@ def evaluate_run(
     condition's population (``population``: the condition's folder), by the CRN protocol: per
     budget and member, each predator's mean return as trained, as always-chase and as always-stalk
     (``panels``), its standard error as trained and the capture rate."""
-    from pursuit_bench.agents.kinds import ScriptedAgent
-    from pursuit_bench.rules.policies import FleeingPrey
     from pursuit_bench.training import runs
-    from pursuit_bench.training.evaluate import PROTOCOL, evaluate_together
+    from pursuit_bench.training.evaluate import PROTOCOL
 
-    opponents = read_population(population)
     out: dict[str, Any] = {}
     for budget in budgets:
         checkpoint = runs.CHECKPOINT if budget == budgets[-1] else runs.milestone_checkpoint(budget)
-        config, agents, _ = runs.described(folder, checkpoint)
-        protocol = dict(config.protocol)
-        learned_epsilon = protocol.pop("prey_epsilon")
-        predators = {k: v for k, v in agents.items() if k != "prey_0"}
-        setups: list[tuple[dict[str, Any], float | None]] = []
-        for member in opponents:  # every member at this budget in one batch of arenas
-            if member["policy"] == FLEEING:
-                fleeing = FleeingPrey(obstacles=bool(config.task_options.get("obstacles")))
-                setups.append(({**predators, "prey_0": ScriptedAgent("prey_0", fleeing)}, None))
-            else:
-                setups.append(
-                    ({**predators, "prey_0": load_member(population / member["files"]["prey_0"])}, learned_epsilon)
-                )
-        results = evaluate_together(
-            config.condition, setups, episodes=episodes, seed=seed, prey_check=False, **protocol
-        )
-        evaluations = {}
-        for member, result in zip(opponents, results, strict=True):
-            evaluations[member["name"]] = {
-                "panels": {
-                    p["predator"]: [p["trained"], p["always_chase"], p["always_stalk"]] for p in result["panels"]
-                },
-                "stderr": {p["predator"]: p["stderr"]["trained"] for p in result["panels"]},
-                "capture_rate": result["capture_rate"],
-            }
-        out[str(budget)] = evaluations
+        out[str(budget)] = evaluate_checkpoint(folder, checkpoint, population, episodes=episodes, seed=seed)
     return {"protocol": PROTOCOL, "episodes": episodes, "eval_seed": seed, "pool": out}
+
+
+def evaluate_checkpoint(
+    folder: Path,
+    checkpoint: str,
+    population: Path,
+    *,
+    episodes: int = EPISODES,
+    seed: int = EVAL_SEED,
+    outcomes: bool = False,
+) -> dict[str, Any]:
+    """One checkpoint of a run folder against each member of a population (the condition's
+    folder), every member in one batch of arenas: per member, :func:`evaluate_run`'s entries;
+    with ``outcomes`` also the prey's (``prey``: return, wall exits, captures, survival in the
+    trained variant's episodes)."""
+    from pursuit_bench.agents.kinds import ScriptedAgent
+    from pursuit_bench.rules.policies import FleeingPrey
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.evaluate import evaluate_together
+
+    opponents = read_population(population)
+    config, agents, _ = runs.described(folder, checkpoint)
+    protocol = dict(config.protocol)
+    learned_epsilon = protocol.pop("prey_epsilon")
+    predators = {k: v for k, v in agents.items() if k != "prey_0"}
+    setups: list[tuple[dict[str, Any], float | None]] = []
+    for member in opponents:
+        if member["policy"] == FLEEING:
+            fleeing = FleeingPrey(obstacles=bool(config.task_options.get("obstacles")))
+            setups.append(({**predators, "prey_0": ScriptedAgent("prey_0", fleeing)}, None))
+        else:
+            setups.append(
+                ({**predators, "prey_0": load_member(population / member["files"]["prey_0"])}, learned_epsilon)
+            )
+    results = evaluate_together(
+        config.condition, setups, episodes=episodes, seed=seed, prey_check=False, outcomes=outcomes, **protocol
+    )
+    evaluations = {}
+    for member, result in zip(opponents, results, strict=True):
+        evaluations[member["name"]] = {
+            "panels": {p["predator"]: [p["trained"], p["always_chase"], p["always_stalk"]] for p in result["panels"]},
+            "stderr": {p["predator"]: p["stderr"]["trained"] for p in result["panels"]},
+            "capture_rate": result["capture_rate"],
+            **({"prey": result["prey_outcomes"]} if outcomes else {}),
+        }
+    return evaluations
 
 
 def write_run(where: Path, name: str, condition: str, kind: str, seed: int, build: str, result: dict[str, Any]) -> Path:

@@ -459,6 +459,7 @@ def evaluate_agents(
     avoidance: bool = False,
     perturbations: Perturbations | None = None,
     prey_check: bool = True,
+    outcomes: bool = False,
 ) -> dict[str, Any]:
     """The paper's protocol (section 3.4): predators greedy, the prey ε-greedy with ε = 0.1 (a
     learning prey; ``prey_epsilon=None`` for a scripted one). For each predator, its mean
@@ -486,7 +487,9 @@ def evaluate_agents(
 
     ``perturbations`` (:mod:`pursuit_bench.env.perturbations`) change every variant's world and
     senses alike; the result names them (``perturbations``). ``prey_check=False`` skips the
-    prey's check (two plays fewer)."""
+    prey's check (two plays fewer). ``outcomes=True`` adds ``prey_outcomes``: the prey's return,
+    wall exits, captures and survival in the trained variant's episodes, as it played them
+    (:func:`prey_outcomes`)."""
     variants, checking = _protocol_variants(agents, prey_epsilon, prey_check, avoidance, task_options)
     crn = perturbations is None or not perturbations.senses
     if crn:  # every variant in one batch of arenas, with common random numbers
@@ -511,7 +514,7 @@ def evaluate_agents(
     return _protocol_result(
         condition, agents, played, episodes=episodes, seed=seed, prey_epsilon=prey_epsilon,
         predator_kind=predator_kind, checking=checking, crn=crn, task_options=task_options,
-        perturbations=perturbations,
+        perturbations=perturbations, outcomes=outcomes,
     )  # fmt: skip
 
 
@@ -529,6 +532,7 @@ def evaluate_together(
     avoidance: bool = False,
     perturbations: Perturbations | None = None,
     prey_check: bool = True,
+    outcomes: bool = False,
 ) -> list[dict[str, Any]]:
     """:func:`evaluate_agents` of each setup (the agents and the prey's ε, ``prey_epsilon``) with
     the options given, every setup's variants in one batch of arenas: the same results (common
@@ -561,6 +565,7 @@ def evaluate_together(
                 crn=True,
                 task_options=task_options,
                 perturbations=perturbations,
+                outcomes=outcomes,
             )
         )
     return out
@@ -604,6 +609,7 @@ def _protocol_result(
     crn: bool,
     task_options: Mapping[str, Any] | None,
     perturbations: Perturbations | None,
+    outcomes: bool = False,
 ) -> dict[str, Any]:
     """What :func:`evaluate_agents` returns, from its variants' episodes (``played``, in the
     order :func:`_protocol_variants` gives them)."""
@@ -652,6 +658,7 @@ def _protocol_result(
             "draws": PROTOCOL if crn else SEQUENTIAL,
         },
         "prey_check": checked,
+        **({"prey_outcomes": prey_outcomes(trained, CONDITIONS[condition].max_steps)} if outcomes else {}),
         **({"perturbations": perturbations.changed} if perturbations is not None and perturbations.changed else {}),
         **(
             {

@@ -10,7 +10,8 @@ checkpoint to 10^6 by a plan that differs only in its length and its kept checkp
 a resumed run equals one trained in one go). Run it against the study's pinned build:
 
     cd /work/main && PYTHONPATH=/work/budget-build nohup nice -n 19 .venv/bin/python \\
-        studies/budget/run.py --workers 1 > /dev/null 2>&1 &        # start, or resume: the same command
+        studies/budget/run.py --workers 2 --populations pursuit_bench/pretrained/populations \\
+        --results results/budget-study/runs > /dev/null 2>&1 &        # start, or resume (PLAN.md)
     kill -TERM "$(cat /work/budget-study/driver.pid)"               # stop cleanly (checkpoints; exit 143)
     tail -f /work/budget-study/progress.log                         # progress
 
@@ -18,8 +19,11 @@ The driver holds its work folder's lock, refuses a package other than ``build.js
 once started, other than the one it started with: ``study.json``), and on SIGTERM or SIGINT stops
 its workers (each checkpoints its stack) and exits 143; the same command resumes exactly.
 Before a judged run is carried on, its first part is replayed against the rule study's population
-and must give the rule study's committed result (PROTOCOL.md). The study's own evaluation is not
-here yet.
+and must give the rule study's committed result (PROTOCOL.md); as it ends, ``evaluate.py`` judges
+it in a process of its own with this checkout's package. Each run's outcome (a population
+member's prey at every budget, a judged run's compact result) is kept as the run ends where a
+later machine finds it (``--populations``, ``--results``: committed), and only runs without one
+are trained.
 """
 
 from __future__ import annotations
@@ -33,7 +37,6 @@ import shutil
 import signal
 import subprocess
 import sys
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -247,40 +250,59 @@ def gather(on: Path, tag: str, folder: Path, names: list[str]) -> None:
             break
 
 
+def kept(args: Any, stage: str, condition: str, kind: str, seed: int) -> bool:
+    """Whether a run's outcome is kept where a later machine finds it: a population member's prey
+    at every budget, or a judged run's compact result (``--results/<run>.json.gz``)."""
+    if stage == "population":
+        return stored(args, condition, f"{kind}-seed{seed}")
+    return (args.results / f"{design.run_name(condition, kind, seed)}.json.gz").is_file()
+
+
+def keep(args: Any, stage: str, condition: str, run: Path) -> None:
+    """Keep a finished run's outcome (:func:`kept`): store its prey, or evaluate it."""
+    if stage == "population":
+        store_member(args, condition, run)
+    elif not (args.results / f"{run.name}.json.gz").is_file():
+        evaluate_judged(args, condition, run)
+
+
 def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> bool:
-    """One sweep's runs through both parts; whether they are done. In the population stage a
-    run whose member is stored at every budget is not trained on again: the continuation is a
-    plan of the rest (the smallest run of seeds holding them; its runs train one after another,
-    each from its own step, so they are the runs the whole plan trains)."""
+    """One kind's runs of a condition through both parts; whether they are done. A run whose
+    outcome is kept (:func:`kept`) is not trained on again: the continuation is a plan of the
+    rest (the smallest run of seeds holding them; its runs train one after another, each from its
+    own step, so they are the runs the whole plan trains), and each run's outcome is kept as it
+    ends. The judged runs' first part is the rule study's plan of both kinds, trained once."""
     import dataclasses
 
     trial = args.trial
-    tag = f"{stage}-{kind}-{condition}" if stage == "population" else f"judged-{condition}"
+    tag = f"{stage}-{kind}-{condition}"
+    first_tag = tag if stage == "population" else f"judged-{condition}"
     on_plan = design.continuation_plan(stage, condition, kind, args.budgets, args.judged_seeds, **trial)
+    on_plan = dataclasses.replace(on_plan, predators=(kind,))
     on = args.work / "on" / tag
-    finished: Callable[[str], None] | None = None
-    if stage == "population":
-        rest = [s for s in design.population_seeds(kind) if not stored(args, condition, f"{kind}-seed{s}")]
-        if not rest:
-            log(args.work, f"{tag}: every member stored at every budget in {args.populations}: not trained again")
-            return True
-        if len(rest) < on_plan.seeds:
-            on_plan = dataclasses.replace(on_plan, first_seed=rest[0], seeds=rest[-1] - rest[0] + 1)
-            on = args.work / "on" / f"{tag}-from-seed{rest[0]}"
-            log(args.work, f"{tag}: members of seeds {rest[0]}–{rest[-1]} to train; the others are stored")
+    rest = [
+        s
+        for s in range(on_plan.first_seed, on_plan.first_seed + on_plan.seeds)
+        if not kept(args, stage, condition, kind, s)
+    ]
+    if not rest:
+        log(args.work, f"{tag}: every run's outcome is kept: not trained again")
+        return True
+    if len(rest) < on_plan.seeds:
+        on_plan = dataclasses.replace(on_plan, first_seed=rest[0], seeds=rest[-1] - rest[0] + 1)
+        on = args.work / "on" / f"{tag}-from-seed{rest[0]}"
+        log(args.work, f"{tag}: seeds {rest[0]}–{rest[-1]} to train; the others' outcomes are kept")
 
-        def store(name: str) -> None:
-            store_member(args, condition, on / "runs" / name)
-
-        finished = store
+    def finished(name: str) -> None:
+        keep(args, stage, condition, on / "runs" / name)
 
     names = sorted(on_plan.runs())
     if all(trained(on / "runs" / n, on_plan.episodes) for n in names):
-        for name in names if finished is not None else ():
-            store_member(args, condition, on / "runs" / name)
+        for name in names:
+            finished(name)
         return True
     first_plan = design.first_part(stage, condition, kind, args.budgets, args.rule_keep, **trial)
-    first = args.work / "first" / tag
+    first = args.work / "first" / first_tag
     from pursuit_bench.training.sweep import open_sweep
 
     if on.exists():
@@ -304,10 +326,39 @@ def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> 
             carry_on(first / "runs" / name, on, on_plan, name)
     log(args.work, f"{tag}: on to {on_plan.episodes} episodes, checkpoints kept at {list(on_plan.keep_checkpoints)}")
     done = sweep(args.work, on, on_plan, args.workers, stop, finished)
-    for name in names if finished is not None else ():
+    for name in names:
         if trained(on / "runs" / name, on_plan.episodes):
-            store_member(args, condition, on / "runs" / name)  # heard of before a stop, or trained earlier
+            finished(name)  # heard of before a stop, or trained earlier
     return done
+
+
+def evaluate_judged(args: Any, condition: str, run: Path) -> None:
+    """A finished judged run evaluated by ``evaluate.py`` in a process of its own with this
+    checkout's package (which first replays the rule study's result), its compact result written
+    to ``--results``; SystemExit if that fails."""
+    command = [
+        sys.executable, str(HERE / "evaluate.py"), str(run), "--condition", condition, "--build", args.build["commit"],
+        "--populations", str(args.populations), "--out", str(args.results),
+        "--budgets", ",".join(str(b) for b in args.budgets),
+    ]  # fmt: skip
+    if args.eval_episodes is not None:
+        command += ["--episodes", str(args.eval_episodes), "--paper-episodes", str(args.eval_episodes)]
+    if args.no_replay_check:
+        command.append("--no-replay-check")
+    log(args.work, f"{run.name}: evaluating (populations of every budget, the paper's protocol at the last)")
+    done = subprocess.run(command, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True)
+    if done.returncode != 0:
+        last = (done.stderr.strip().splitlines() or ["no message"])[-1]
+        log(args.work, f"{run.name}: its evaluation failed ({last}): stopped")
+        raise SystemExit(f"{run.name}: its evaluation failed: {last}")
+    log(args.work, f"{run.name}: evaluated, {done.stdout.strip()}")
+
+
+def populations_written(args: Any, condition: str) -> bool:
+    """Whether every budget's population of ``condition`` is written (the judged runs' judges)."""
+    return all(
+        (args.populations / design.population_name(b) / condition / "population.json").is_file() for b in args.budgets
+    )
 
 
 def store_member(args: Any, condition: str, run: Path) -> None:
@@ -401,14 +452,26 @@ def drive(args: Any) -> int:
         f"budget study: {', '.join(args.conditions)}; stages {', '.join(args.stages)}; budgets {list(args.budgets)}; "
         f"commit {args.build['commit'][:10]}, code {args.build['code']}, pid {os.getpid()}",
     )
+    waiting = []
     for stage in args.stages:
         for condition in args.conditions:
-            for kind in design.KINDS if stage == "population" else ("both",):
+            if stage == "judged" and not populations_written(args, condition):
+                log(args.work, f"judged-{condition}: not every budget's population is written yet: left for later")
+                waiting.append(condition)
+                continue
+            for kind in design.KINDS:
                 if stop[0] or not unit(args, stage, condition, kind, stop):
                     log(args.work, "stopped: rerun the same command to resume")
                     return 143
-            if stage == "population":
+            if stage == "population" and all(
+                stored(args, condition, m["name"]) for m in design.members(condition) if m["policy"] is None
+            ):
                 write_populations(args, condition)
+    if waiting:
+        log(
+            args.work, f"finished what could be trained; judged runs of {', '.join(waiting)} wait for their populations"
+        )
+        return 0
     log(args.work, "finished: every run trained")
     return 0
 
@@ -437,6 +500,13 @@ def main() -> int:
     parser.add_argument("--rule-results", type=Path, default=ROOT / "results" / "rule-study" / "runs")
     parser.add_argument("--rule-population", type=Path, default=None, help="Default: the package's rule-study.")
     parser.add_argument("--no-replay-check", action="store_true", help="(trying the driver only)")
+    parser.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        help="Where judged runs' compact results go (the study's: results/budget-study/runs). Default: --work/results.",
+    )
+    parser.add_argument("--eval-episodes", type=int, default=None, help="(trying the driver only)")
     parser.add_argument("--no-population-check", action="store_true", help="(trying the driver only)")
     parser.add_argument("--skip-build-check", action="store_true", help="(tests only)")
     args = parser.parse_args()
@@ -483,6 +553,7 @@ def main() -> int:
         print("trying the driver (--budgets, --preset …): give another --work than the study's", file=sys.stderr)
         return 2
     args.populations = args.populations or args.work / "populations"
+    args.results = args.results or args.work / "results"
     args.work.mkdir(parents=True, exist_ok=True)
     from pursuit_bench.io.files import RunBusy, locked
 
