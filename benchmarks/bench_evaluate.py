@@ -121,7 +121,7 @@ def _child(workload: str, work: Path, profile: Path | None) -> None:
             profiler.enable()
         evaluate.evaluate_agents(what, agents, episodes=5000, seed=12345)
     elif kind == "study-job":
-        from pursuit_bench.study import rule_study
+        from pursuit_bench.reports import rule_study
 
         population = ROOT / "pursuit_bench/pretrained/populations/rule-study" / what
         folder = work / "runs" / f"{what}-hierarchical-seed0"

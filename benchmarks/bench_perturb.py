@@ -1,5 +1,5 @@
 """Cost of a perturbed evaluation: the shipped agents of a condition playing episodes,
-unperturbed and under each perturbation at its strongest rung (pursuit_bench.study.robustness.LADDERS)
+unperturbed and under each perturbation at its strongest rung (pursuit_bench.analysis.robustness.LADDERS)
 and all sense perturbations together, in one process; medians of ``--repeats``, reported per
 step (perturbations change how long episodes last, so time per evaluation mixes that in) and
 as a ratio to the unperturbed play measured in the same run (target: within 1.5x).
@@ -16,8 +16,8 @@ import time
 import torch
 
 from pursuit_bench import pretrained
+from pursuit_bench.analysis.robustness import LADDERS, perturbation
 from pursuit_bench.env.perturbations import Perturbations
-from pursuit_bench.study.robustness import LADDERS, perturbation
 from pursuit_bench.training.evaluate import run_episodes
 
 

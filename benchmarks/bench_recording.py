@@ -20,8 +20,8 @@ import torch
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.training import runs
 from pursuit_bench.training.evaluate import evaluate_agents
-from pursuit_bench.training.recording import Recorder
 from pursuit_bench.training.train import TrainConfig, Trainer
+from pursuit_bench.trajectories.recording import Recorder
 
 
 def main() -> None:

@@ -77,7 +77,7 @@ def evaluations(episodes: int) -> dict[str, str]:
 
 
 def scores(episodes: int) -> dict[str, str]:
-    from pursuit_bench.study import score
+    from pursuit_bench.benchmark import score
 
     out = {}
     for spec, role, conditions in (

@@ -40,7 +40,7 @@ def main() -> int:
     import torch
 
     from pursuit_bench.agents.config import PRESETS
-    from pursuit_bench.study import rule_study
+    from pursuit_bench.reports import rule_study
     from pursuit_bench.training.sweep import SweepPlan, open_sweep, run_sweep
 
     torch.set_num_threads(1)

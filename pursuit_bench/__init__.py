@@ -9,9 +9,11 @@ agent=…, condition=…)`` is a single-agent view, and ``gymnasium.make_vec`` w
 arguments N of them as one Gymnasium ``VectorEnv`` over the batched core; ``load_agents(RUN)``
 returns the trained agents of a run folder by name.
 
-The package's layers are folders (each ``__init__`` says what it holds and may import):
-``io`` ← ``env`` ← ``rules`` ← ``agents`` ← ``training`` ← ``study`` ← ``cli``, and
-``pretrained`` (the shipped agents). The envs, numba's kernels and torch are imported when
+The package's layers are folders (each ``__init__`` says what it holds and may import; docs/layout.md):
+``io`` and ``stats`` ← ``env`` ← ``rules`` ← ``agents`` ← ``trajectories`` ← ``training`` ←
+``pretrained`` (the shipped agents) ← ``benchmark`` ← ``laws`` ← ``figures`` ← ``analysis`` ←
+``reports`` ← ``cli``. Modules that moved in 0.2 import by their old names for one release
+(``io/moved.py``). The envs, numba's kernels and torch are imported when
 first used, so that ``import pursuit_bench`` (and the command line's ``--help``) stays quick.
 """
 
@@ -37,6 +39,7 @@ os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
 import gymnasium
 
 from pursuit_bench.env.conditions import CONDITIONS, TaskConfig
+from pursuit_bench.io import moved
 
 if TYPE_CHECKING:
     from pursuit_bench.env import pursuit_v0
@@ -68,7 +71,10 @@ _LAZY = {
 
 #: The layers and the shipped agents, imported on first use as attributes
 #: (``pursuit_bench.pretrained.info``, ``pursuit_bench.env.task``).
-_SUBPACKAGES = {"agents", "cli", "env", "io", "pretrained", "rules", "study", "training"}
+_SUBPACKAGES = {
+    "agents", "analysis", "benchmark", "cli", "env", "figures", "io", "laws", "pretrained", "reports", "rules",
+    "stats", "training", "trajectories",
+}  # fmt: skip
 
 
 def __getattr__(name: str) -> Any:
@@ -82,6 +88,8 @@ def __getattr__(name: str) -> Any:
         return value
     raise AttributeError(f"module 'pursuit_bench' has no attribute {name!r}")
 
+
+moved.install()
 
 if "pursuit_bench/Pursuit-v0" not in gymnasium.registry:
     gymnasium.register(

@@ -103,7 +103,7 @@ RESIDUAL_DOC = ROOT / "docs" / "residual.md"
 def rule_study_summary() -> dict[str, Any]:
     """The rule study's report (``rule_report.summarise``) of the committed results, its seed rule
     applied: a condition whose runs the rule still asks for is left out."""
-    from pursuit_bench.study import rule_report, rule_study
+    from pursuit_bench.reports import rule_report, rule_study
 
     runs = rule_study.read_runs(RULE_STUDY / "runs")
     return rule_report.summarise(runs, seed_rule=rule_report.study_of(RULE_STUDY).seed_rule)
@@ -115,8 +115,9 @@ def answer() -> dict[str, Any]:
     conditions still running (the rule study's seed rule applied), per kind the panels where
     its runs fail significantly more often (reliability, Holm), and per budget before the last
     the primary measure's "rule helps" and "flat better" counts (each budget its own Holm family)."""
+    from pursuit_bench import stats
     from pursuit_bench.env.conditions import CONDITIONS
-    from pursuit_bench.study import report, statistics
+    from pursuit_bench.reports import reproduction as report
 
     summary = rule_study_summary()
     rows: dict[str, tuple[int, ...]] = {}
@@ -135,7 +136,7 @@ def answer() -> dict[str, Any]:
         more: dict[str, list[tuple[str, str]]] = {"flat": [], "hierarchical": []}
         for r in summary["secondary"][key]:
             # two-sided at 2 ALPHA, as the verdicts; the difference is hierarchical's share − flat's
-            if r["difference"]["p_holm"] <= 2 * statistics.ALPHA:
+            if r["difference"]["p_holm"] <= 2 * stats.ALPHA:
                 more["hierarchical" if r["difference"]["difference"] > 0 else "flat"].append(
                     (r["condition"], r["predator"])
                 )
@@ -267,7 +268,7 @@ def study_block(counts: dict[str, Any]) -> str:
     """REPRODUCTION.md's generated block of the rule study: the README's sentences, then the
     study's report (``pursuit-bench report results/rule-study``'s rule-study.md), its headings one
     level down."""
-    from pursuit_bench.study import rule_report
+    from pursuit_bench.reports import rule_report
 
     tables = ("\n" + rule_report.markdown(rule_study_summary())).replace("\n## ", "\n### ").strip()
     return "\n".join([STUDY_BEGIN, _paragraph(counts), "", tables, STUDY_END])
@@ -294,7 +295,7 @@ def residual_headline(summary: dict[str, Any]) -> str:
     """What the study's report says, in sentences: each comparison's primary verdicts with the
     panels named, then each robustness ladder's cells where the residual predator's margin changes
     significantly more or less favourably than the hierarchical one's (Holm per ladder), settings named."""
-    from pursuit_bench.study import statistics
+    from pursuit_bench import stats
 
     panels = summary["primary"]["panels"]
     first_pair = list(summary["comparisons"][0])
@@ -324,7 +325,7 @@ def residual_headline(summary: dict[str, Any]) -> str:
     said = []
     for name, ladder in ladders.items():
         sides = [
-            statistics.difference_verdict(c["difference"]["mean"], c["difference"]["p_holm"], None, ("below", "above"))
+            stats.difference_verdict(c["difference"]["mean"], c["difference"]["p_holm"], None, ("below", "above"))
             for c in ladder["cells"]
         ]
         found = []
@@ -351,7 +352,7 @@ def residual_block() -> str:
     (``pursuit-bench report results/residual-study``'s residual-study.md, its headings one level
     down) over the settings whose runs are all in, led by what is not judged yet; before any
     setting is complete, only that."""
-    from pursuit_bench.study import rule_report, rule_study
+    from pursuit_bench.reports import rule_report, rule_study
 
     study = rule_report.study_of(RESIDUAL_STUDY, "residual-study")
     runs = rule_study.read_runs(RESIDUAL_STUDY / "runs")

@@ -277,7 +277,7 @@ def record_episode(path: Path) -> None:
     import pursuit_bench
     from pursuit_bench import pretrained
     from pursuit_bench.agents import HierarchicalPredator
-    from pursuit_bench.training.recording import RecordEpisodes
+    from pursuit_bench.trajectories.recording import RecordEpisodes
 
     agents = pretrained.load(EPISODE_CONDITION)
     env = RecordEpisodes(pursuit_bench.parallel_env(EPISODE_CONDITION), path)

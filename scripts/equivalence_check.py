@@ -137,7 +137,7 @@ def analyse(units: list[dict], margin: float) -> dict:
     paired and Welch equivalence tests of ours minus reference, Holm over the two."""
     import numpy as np
 
-    from pursuit_bench.study import statistics
+    from pursuit_bench import stats
 
     by_build: dict[str, dict[int, dict]] = {}
     for unit in units:
@@ -152,15 +152,15 @@ def analyse(units: list[dict], margin: float) -> dict:
             "ours": ours.tolist(),
             "reference": theirs.tolist(),
             "mean_difference": float((ours - theirs).mean()),
-            "difference": statistics.paired_difference(ours, theirs),
-            "paired": statistics.paired_equivalence(ours - theirs, margin),
-            "welch_equivalence": statistics.equivalence(ours, theirs, margin),
+            "difference": stats.paired_difference(ours, theirs),
+            "paired": stats.paired_equivalence(ours - theirs, margin),
+            "welch_equivalence": stats.equivalence(ours, theirs, margin),
         }
     for key in ("paired", "welch_equivalence"):
-        holm = statistics.holm([tests[o][key]["p"] for o in tests])
+        holm = stats.holm([tests[o][key]["p"] for o in tests])
         for opponent, p in zip(tests, holm, strict=True):
             tests[opponent][key]["p_holm"] = float(p)
-            tests[opponent][key]["equivalent"] = bool(p <= statistics.ALPHA)
+            tests[opponent][key]["equivalent"] = bool(p <= stats.ALPHA)
     return {"seeds": seeds, "margin": margin, "tests": tests}
 
 

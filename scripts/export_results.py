@@ -15,7 +15,7 @@ import argparse
 import json
 from pathlib import Path
 
-from pursuit_bench.study import report
+from pursuit_bench.reports import reproduction as report
 
 
 def main() -> None:

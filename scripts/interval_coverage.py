@@ -1,10 +1,10 @@
 """How often a 95 % interval over seeds holds the true mean: the t-interval the reports use
-(``pursuit_bench.study.statistics.coverage``) beside the percentile bootstrap they used before, on
+(``pursuit_bench.stats.coverage``) beside the percentile bootstrap they used before, on
 normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each; Welch's interval and the
 equivalence test at the pool study's 8 runs a kind and at the rule study's 10, 20 and 30 (with
 Wilson's interval of a failure share and the seed rule's type I error); and the median's
 interval the pursuit-law fits give over attacks, at 3–20 values. Prints the tables
-docs/statistics.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
+docs/stats.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
 differences of results/reproduction are beside the simulated data, by the same measure.
 
     python scripts/interval_coverage.py
@@ -16,9 +16,10 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
+from scipy import stats as scipy_stats
 
-from pursuit_bench.study import report, statistics
+from pursuit_bench import stats
+from pursuit_bench.reports import reproduction as report
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -34,7 +35,7 @@ DISTRIBUTIONS = (
 
 
 def percentile_bootstrap_coverage(draw, truth: float, n: int, seed: int) -> float:  # type: ignore[no-untyped-def]
-    """The same draws as :func:`statistics.coverage` (same seed), each given the percentile
+    """The same draws as :func:`stats.coverage` (same seed), each given the percentile
     bootstrap interval of its mean from RESAMPLES resamples."""
     rng = np.random.default_rng(seed)
     samples = np.asarray(draw(rng, (DRAWS, n)), dtype=float)
@@ -50,12 +51,12 @@ def percentile_bootstrap_coverage(draw, truth: float, n: int, seed: int) -> floa
 
 
 def median_coverage(sigma: float, n: int, draws: int = 1000) -> float:
-    """How often :func:`statistics.median_interval` holds the true median of lognormal data
+    """How often :func:`stats.median_interval` holds the true median of lognormal data
     (skewed, as fitted gains are) from ``n`` values; ``draws`` simulated sets."""
     rng = np.random.default_rng(n)
     held = 0
     for k in range(draws):
-        interval = statistics.median_interval(rng.lognormal(0.0, sigma, n), seed=k, minimum=1)
+        interval = stats.median_interval(rng.lognormal(0.0, sigma, n), seed=k, minimum=1)
         held += interval is not None and interval[0] <= 1.0 <= interval[1]
     return held / draws
 
@@ -83,15 +84,13 @@ def welch_checks(margin: float = 0.05, sd: float = 0.03) -> None:
     for label, draw_h, draw_f, truth in WELCH_CASES:
         rng = np.random.default_rng(1)
         h, f = draw_h(rng, (DRAWS, POOL_RUNS)), draw_f(rng, (DRAWS, POOL_RUNS))
-        ci = [statistics.welch_difference(x, y)["ci"] for x, y in zip(h, f, strict=True)]
+        ci = [stats.welch_difference(x, y)["ci"] for x, y in zip(h, f, strict=True)]
         print(f"| {label} | {np.mean([lo <= truth <= hi for lo, hi in ci]):.1%} |")
     print(f"\n| true difference (runs' sd {sd}) | called equivalent within ±{margin} |\n|---:|---:|")
     for truth in (margin, 0.0):
         rng = np.random.default_rng(2)
         h, f = rng.normal(truth, sd, (DRAWS, POOL_RUNS)), rng.normal(0.0, sd, (DRAWS, POOL_RUNS))
-        called = np.mean(
-            [statistics.equivalence(x, y, margin)["p"] <= statistics.ALPHA for x, y in zip(h, f, strict=True)]
-        )
+        called = np.mean([stats.equivalence(x, y, margin)["p"] <= stats.ALPHA for x, y in zip(h, f, strict=True)])
         print(f"| {truth:+.2f} | {called:.1%} |")
 
 
@@ -126,7 +125,7 @@ def rule_study_checks(margin: float = 0.05) -> None:
         for n in STUDY_RUNS:
             rng = np.random.default_rng(n)
             h, f = draw_h(rng, (DRAWS, n)), draw_f(rng, (DRAWS, n))
-            ci = [statistics.welch_difference(x, y)["ci"] for x, y in zip(h, f, strict=True)]
+            ci = [stats.welch_difference(x, y)["ci"] for x, y in zip(h, f, strict=True)]
             held.append(np.mean([lo <= truth <= hi for lo, hi in ci]))
         print(f"| {label} | " + " | ".join(f"{c:.1%}" for c in held) + " |")
     print(
@@ -136,7 +135,7 @@ def rule_study_checks(margin: float = 0.05) -> None:
         held = []
         for n in STUDY_RUNS:
             counts = np.random.default_rng(n).binomial(n, share, DRAWS)
-            intervals = {c: statistics.wilson_interval(int(c), n) for c in np.unique(counts)}
+            intervals = {c: stats.wilson_interval(int(c), n) for c in np.unique(counts)}
             held.append(np.mean([intervals[c][0] <= share <= intervals[c][1] for c in counts]))
         print(f"| {share} | " + " | ".join(f"{c:.1%}" for c in held) + " |")
     rng = np.random.default_rng(3)
@@ -148,8 +147,8 @@ def rule_study_checks(margin: float = 0.05) -> None:
         while n < 30 and ((h[:n] < 0).any() or (f[:n] < 0).any()):
             n += 10
         sizes.append(n)
-        fixed += statistics.welch_difference(h[:10], f[:10])["p"] <= 2 * statistics.ALPHA
-        rule += statistics.welch_difference(h[:n], f[:n])["p"] <= 2 * statistics.ALPHA
+        fixed += stats.welch_difference(h[:10], f[:10])["p"] <= 2 * stats.ALPHA
+        rule += stats.welch_difference(h[:n], f[:n])["p"] <= 2 * stats.ALPHA
     print(
         f"\nno true difference, both kinds split (a fifth fail): the primary test rejects {fixed / DRAWS:.1%} "
         f"at 10 runs, {rule / DRAWS:.1%} under the seed rule (runs a kind: mean {np.mean(sizes):.1f}; "
@@ -158,24 +157,22 @@ def rule_study_checks(margin: float = 0.05) -> None:
     for n in STUDY_RUNS:
         rng = np.random.default_rng(4)
         h, f = rng.normal(margin, 0.05, (DRAWS, n)), rng.normal(0.0, 0.05, (DRAWS, n))
-        called = np.mean(
-            [statistics.equivalence(x, y, margin)["p"] <= statistics.ALPHA for x, y in zip(h, f, strict=True)]
-        )
+        called = np.mean([stats.equivalence(x, y, margin)["p"] <= stats.ALPHA for x, y in zip(h, f, strict=True)])
         print(f"true difference {margin:+.2f} (runs' sd 0.05), {n} runs a kind: called equivalent {called:.1%}")
 
 
 def pooled_skewness(groups: np.ndarray | list[np.ndarray]) -> float:
     """The sample skewness of values standardised within their group (a comparison's seeds)."""
     z = [(g - g.mean()) / g.std(ddof=1) for g in map(np.asarray, groups)]
-    return float(stats.skew(np.concatenate(z)))
+    return float(scipy_stats.skew(np.concatenate(z)))
 
 
 def coverage_markdown() -> str:
-    """docs/statistics.md's coverage table: the t-interval beside the percentile bootstrap."""
+    """docs/stats.md's coverage table: the t-interval beside the percentile bootstrap."""
     lines = ["| data | seeds | t-interval | percentile bootstrap |", "|---|---:|---:|---:|"]
     for label, draw, truth in DISTRIBUTIONS:
         for n in SEEDS:
-            t = statistics.coverage(draw, truth, n, DRAWS, seed=n)
+            t = stats.coverage(draw, truth, n, DRAWS, seed=n)
             bootstrap = percentile_bootstrap_coverage(draw, truth, n, seed=n)
             lines.append(f"| {label} | {n} | {t:.1%} | {bootstrap:.1%} |")
     return "\n".join(lines) + "\n"
@@ -184,7 +181,7 @@ def coverage_markdown() -> str:
 def skewness_figures() -> dict[str, float]:
     """How skewed the reproduction's seed-level differences are (pooled over its comparisons,
     standardised within each), and the same measure on as many simulated groups of each
-    distribution: docs/statistics.md quotes them."""
+    distribution: docs/stats.md quotes them."""
     table = report.panel_table(report.collect(ROOT / "results" / "reproduction"))
     ours = [np.array(c["differences"]) for t in table for c in t.get("paired", {}).values()]
     n, rng = len(ours[0]), np.random.default_rng(0)
@@ -198,7 +195,7 @@ def main() -> None:
     print(coverage_markdown())
     welch_checks()
     rule_study_checks()
-    print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (statistics.median_interval) |")
+    print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (stats.median_interval) |")
     print("|---:|---:|---:|")
     for sigma in (0.3, 0.6):
         for n in (3, 5, 10, 20):

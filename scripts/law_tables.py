@@ -289,7 +289,7 @@ def shipped_table() -> str:
 
 
 def _censored(values: list[float], sides: list[str | None]) -> dict[str, Any]:
-    from pursuit_bench.study.pursuit_laws import censored_median
+    from pursuit_bench.laws.pursuit_laws import censored_median
 
     return censored_median(values, sides)
 
@@ -347,7 +347,7 @@ def shipped() -> None:
 
     from pursuit_bench import pretrained
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.study import pursuit_laws
+    from pursuit_bench.laws import pursuit_laws
 
     torch.set_num_threads(1)
     condition, episodes, seed = SHIPPED_RUN

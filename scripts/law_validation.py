@@ -1,6 +1,6 @@
 """The pursuit-law method's validation (docs/pursuit-law.md), on synthetic attacks whose law is
-known (:mod:`pursuit_bench.study.synthetic_attacks`), every law fitted and one chosen by BIC
-(:func:`pursuit_bench.study.guidance.select`):
+known (:mod:`pursuit_bench.laws.synthetic_attacks`), every law fitted and one chosen by BIC
+(:func:`pursuit_bench.laws.guidance.select`):
 
 - ``validation``: each law in continuous time, five attacks per case over the whole attack (up
   to 4 s), and the misspecification control: laws flown as our predators fly (12 directions 30°
@@ -35,8 +35,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from pursuit_bench.io.files import atomic_write_text
-from pursuit_bench.study import guidance
-from pursuit_bench.study.synthetic_attacks import TrueLaw, attack
+from pursuit_bench.laws import guidance
+from pursuit_bench.laws.synthetic_attacks import TrueLaw, attack
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "results" / "pursuit-law"

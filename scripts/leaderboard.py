@@ -6,7 +6,7 @@ this writes, byte for byte. A partial row (scored in fewer conditions than all o
 fewer episodes per member than the leaderboard's) is marked † and listed after the full ones,
 its shortfall said under the table: its aggregate is over less, and no row is ranked.
 
-    python scripts/leaderboard.py            # rewrite docs/leaderboard.md and pursuit_bench/study/leaderboard.json
+    python scripts/leaderboard.py            # rewrite docs/leaderboard.md and pursuit_bench/benchmark/leaderboard.json
     python scripts/leaderboard.py --check    # exit 1 if either is not up to date
 """
 
@@ -17,8 +17,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from pursuit_bench.benchmark import score
 from pursuit_bench.io.files import atomic_write_text
-from pursuit_bench.study import score
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "score"
@@ -31,8 +31,8 @@ shortfall = score.shortfall
 
 
 def summary(results: Path = RESULTS) -> str:
-    """pursuit_bench/study/leaderboard.json: every row's name, settings and aggregate, which
-    ``pursuit-bench score`` places a result among (:func:`pursuit_bench.study.score.standing`)."""
+    """pursuit_bench/benchmark/leaderboard.json: every row's name, settings and aggregate, which
+    ``pursuit-bench score`` places a result among (:func:`pursuit_bench.benchmark.score.standing`)."""
     rows: list[dict[str, Any]] = json.loads((results / "rows.json").read_text())
     entries = [score.leaderboard_entry(row["who"], json.loads((results / row["file"]).read_text())) for row in rows]
     about = "written by scripts/leaderboard.py from results/score/rows.json with docs/leaderboard.md"

@@ -19,8 +19,9 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.io.files import atomic_write_bytes
-from pursuit_bench.study import report, statistics
+from pursuit_bench.reports import reproduction as report
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "obstacles"
@@ -54,13 +55,13 @@ def rows() -> list[dict[str, Any]]:
             panels = [e["panels"] for e in chosen]
             trained = np.array([np.mean([p["trained"] for p in ps]) for ps in panels])
             best = np.array([np.mean([max(p["always_chase"], p["always_stalk"]) for p in ps]) for ps in panels])
-            paired = statistics.paired_difference(trained, best)  # seed by seed: same prey, same episodes
+            paired = stats.paired_difference(trained, best)  # seed by seed: same prey, same episodes
             row: dict[str, Any] = {
                 "condition": condition,
                 "variant": label,
                 "seeds": len(chosen),
                 "trained": float(trained.mean()),
-                "trained_interval": statistics.t_interval(trained),
+                "trained_interval": stats.t_interval(trained),
                 "best_baseline": float(best.mean()),
                 "margin": paired["mean"],
                 "margin_interval": paired["ci"],
@@ -76,7 +77,7 @@ def rows() -> list[dict[str, Any]]:
                     row[f"prey_{key}"] = float(np.mean([e[key]["prey_0"] for e in chosen]))
             table.append(row)
     for side in ("margin_p_greater", "margin_p_less"):
-        for row, adjusted in zip(table, statistics.holm([r[side] for r in table]), strict=True):
+        for row, adjusted in zip(table, stats.holm([r[side] for r in table]), strict=True):
             row[f"{side}_holm"] = float(adjusted)
     return table
 

@@ -29,10 +29,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy import stats as scipy_stats
 
+from pursuit_bench import stats
+from pursuit_bench.figures import plots
 from pursuit_bench.io.files import atomic_write_text
-from pursuit_bench.study import plots, rule_report, rule_study, statistics
+from pursuit_bench.reports import rule_report, rule_study
 
 NEAR = 0.5
 """Distance to the prey below which a stalking state counts as near (a distance bin whose lower
@@ -51,7 +53,7 @@ def _where(by_distance: dict[str, Any]) -> np.ndarray:
 
 def corrections_table(runs: list[dict[str, Any]]) -> list[str]:
     """The corrections' summary, one row per setting (the report's order), as markdown lines."""
-    rows = rule_report.corrections(runs, rule_report.budgets(runs)[-1], differs=statistics.EQUIVALENCE_MARGIN)
+    rows = rule_report.corrections(runs, rule_report.budgets(runs)[-1], differs=stats.EQUIVALENCE_MARGIN)
     cells: list[list[str | None]] = []  # None: a Holm-adjusted p, filled in once all are known
     pvalues: list[float] = []
     for setting in dict.fromkeys(r["setting"] for r in rows):
@@ -76,11 +78,11 @@ def corrections_table(runs: list[dict[str, Any]]) -> list[str]:
             if len(paired) < FEWEST_SEEDS or np.ptp(gaps) == 0 or np.ptp(corrected) == 0:
                 row += ["—", "—", "—"]  # too few seeds, or a constant: no rank correlation
                 continue
-            rho = stats.spearmanr(corrected, gaps)
+            rho = scipy_stats.spearmanr(corrected, gaps)
             row += [f"{rho.statistic:+.2f}", f"{rho.pvalue:.3f}", None]
             pvalues.append(float(rho.pvalue))
         cells.append(row)
-    adjusted = iter(statistics.holm(pvalues) if pvalues else [])
+    adjusted = iter(stats.holm(pvalues) if pvalues else [])
     body = ["| " + " | ".join(f"{next(adjusted):.3f}" if c is None else c for c in row) + " |" for row in cells]
     return [
         "Where the residual predator corrects the rule: every residual run at its last budget",

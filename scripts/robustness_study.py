@@ -23,9 +23,9 @@ import re
 from pathlib import Path
 from typing import Any
 
+from pursuit_bench.analysis import robustness
+from pursuit_bench.figures.plots import robust_png
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-from pursuit_bench.study import robustness
-from pursuit_bench.study.plots import robust_png
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "results" / "robustness" / "robust.json.gz"

@@ -27,8 +27,8 @@ from typing import Any
 import numpy as np
 import torch
 
+from pursuit_bench import stats
 from pursuit_bench.agents.config import REPRODUCTION
-from pursuit_bench.study import statistics
 from pursuit_bench.training.evaluate import evaluate_agents
 from pursuit_bench.training.train import TrainConfig, Trainer
 
@@ -181,8 +181,8 @@ def _final_values(rows: list[dict[str, Any]], name: str, condition: str, key: st
 
 
 def _span(values: list[float]) -> str:
-    """The seeds' t-interval (pursuit_bench.study.statistics), as the table prints it."""
-    ci = statistics.t_interval(values)
+    """The seeds' t-interval (pursuit_bench.stats), as the table prints it."""
+    ci = stats.t_interval(values)
     return f" [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else ""
 
 

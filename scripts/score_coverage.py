@@ -1,4 +1,4 @@
-"""How often the score's 95 % interval (``pursuit_bench.study.score.crossed_interval``: members and
+"""How often the score's 95 % interval (``pursuit_bench.benchmark.score.crossed_interval``: members and
 episodes both random) holds the true mean, on simulated (members × episodes) tables with a member
 effect, an episode effect shared by every member (the same episodes) and noise; 2000 tables per
 cell, seeded; then the aggregate's bootstrap interval in one simulated setting. Prints what
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import expit
 
-from pursuit_bench.study.score import aggregate, coverage, iqm
+from pursuit_bench.benchmark.score import aggregate, coverage, iqm
 
 DRAWS = 2000
 MEMBERS = (2, 4, 6, 13)

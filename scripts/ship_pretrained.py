@@ -25,9 +25,9 @@ from pathlib import Path
 from typing import Any
 
 from pursuit_bench import pretrained
+from pursuit_bench.benchmark import populations
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.pretrained import populations
-from pursuit_bench.study import rule_study
+from pursuit_bench.reports import rule_study
 from pursuit_bench.training import runs
 
 ROOT = Path(__file__).resolve().parents[1]

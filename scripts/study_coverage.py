@@ -2,10 +2,10 @@
 each judged panel and comparison of a study's primary measure (the pool return at the last
 budget), runs are drawn with replacement from each kind's committed runs, as many as it has,
 4000 times; the truth of that world is the difference of the committed means, and the check is
-how often Welch's interval (`statistics.welch_difference`, the report's) holds it. The same for
+how often Welch's interval (`stats.welch_difference`, the report's) holds it. The same for
 the robustness ladders' paired t-intervals (residual − hierarchical change of margin, seeds
 resampled as pairs). Where a kind's runs split (some fail, some excel), this is the coverage at
-that split, not at a normal one (docs/statistics.md's tables simulate shapes chosen beforehand).
+that split, not at a normal one (docs/stats.md's tables simulate shapes chosen beforehand).
 
 The world is the committed runs themselves, so its tails are no longer than the data's: a
 coverage well below 95 % here is a warning, one near 95 % is not a guarantee.
@@ -25,8 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.io.files import atomic_write_text
-from pursuit_bench.study import rule_report, rule_study, statistics
+from pursuit_bench.reports import rule_report, rule_study
 
 DRAWS = 4000
 
@@ -45,8 +46,8 @@ def welch_coverage(first: np.ndarray, second: np.ndarray, seed: int) -> float:
     for _ in range(DRAWS):
         a = rng.choice(first, size=len(first), replace=True)
         b = rng.choice(second, size=len(second), replace=True)
-        low, high = statistics.welch_difference(a, b)["ci"]
-        held += low - statistics.TIE <= truth <= high + statistics.TIE
+        low, high = stats.welch_difference(a, b)["ci"]
+        held += low - stats.TIE <= truth <= high + stats.TIE
     return held / DRAWS
 
 
@@ -56,8 +57,8 @@ def paired_coverage(differences: np.ndarray, seed: int) -> float:
     truth = float(differences.mean())
     held = 0
     for _ in range(DRAWS):
-        low, high = statistics.t_interval(rng.choice(differences, size=len(differences), replace=True))  # type: ignore[misc]
-        held += low - statistics.TIE <= truth <= high + statistics.TIE
+        low, high = stats.t_interval(rng.choice(differences, size=len(differences), replace=True))  # type: ignore[misc]
+        held += low - stats.TIE <= truth <= high + stats.TIE
     return held / DRAWS
 
 

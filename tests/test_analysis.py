@@ -8,7 +8,7 @@ import pytest
 import rerun.chunk as rc
 from cli_helpers import run_cli
 
-from pursuit_bench.study.analysis import DISTANCE_BINS, chase_by_distance, embed, onset_summary, organisation
+from pursuit_bench.analysis.behaviour import DISTANCE_BINS, chase_by_distance, embed, onset_summary, organisation
 
 TINY = ["--episodes", "12", "--num-envs", "4", "--learning-starts", "32", "--batch-size", "16", "--no-record"]
 

@@ -35,7 +35,7 @@ def _driver() -> Any:
 driver = _driver()
 design = driver.design
 
-from pursuit_bench.study import rule_study  # noqa: E402
+from pursuit_bench.reports import rule_study  # noqa: E402
 from pursuit_bench.training import runs  # noqa: E402
 from pursuit_bench.training.stack import FolderRun, train_stack  # noqa: E402
 

@@ -70,7 +70,7 @@ def test_the_batched_views_take_continuous_actions() -> None:
 
 
 def test_a_continuous_episode_is_recorded(tmp_path) -> None:
-    from pursuit_bench.training.recording import RecordEpisodes
+    from pursuit_bench.trajectories.recording import RecordEpisodes
 
     env = RecordEpisodes(pursuit_bench.parallel_env("1p-high", continuous=True), tmp_path / "c.rrd")
     env.reset(seed=0)

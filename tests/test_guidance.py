@@ -11,9 +11,9 @@ from cli_helpers import run_cli
 
 from pursuit_bench import pretrained
 from pursuit_bench.agents.kinds import ScriptedAgent
+from pursuit_bench.laws import guidance, pursuit_laws
+from pursuit_bench.laws.synthetic_attacks import TrueLaw, attack
 from pursuit_bench.rules.policies import AlwaysChase, PurePursuitPredator
-from pursuit_bench.study import guidance, pursuit_laws
-from pursuit_bench.study.synthetic_attacks import TrueLaw, attack
 
 DT = 0.1
 ATTACKS = 5

@@ -1,4 +1,5 @@
-"""The folders are the layers: io ← env ← rules ← agents ← training ← pretrained ← study ← cli.
+"""The folders are the layers: io, stats ← env ← rules ← agents ← trajectories ← training ← pretrained
+← benchmark ← laws ← figures ← analysis ← reports ← cli (docs/layout.md).
 Every import in the package (function-local ones too) is read from the source; one that runs
 upward fails, as does a cycle between modules."""
 
@@ -8,7 +9,12 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "pursuit_bench"
-LAYERS = ("io", "env", "rules", "agents", "training", "pretrained", "study", "cli")
+LAYERS = (
+    "io", "stats", "env", "rules", "agents", "trajectories", "training", "pretrained", "benchmark", "laws", "figures",
+    "analysis", "reports", "cli",
+)  # fmt: skip
+#: The ground floor: layers that import nothing of pursuit-bench but themselves.
+GROUND = ("io", "stats")
 
 
 def module_name(path: Path) -> str:
@@ -76,9 +82,9 @@ def test_the_walk_sees_an_upward_import(tmp_path: Path) -> None:
     """The check can fail: an env module importing training is caught."""
     source = tmp_path / "bad.py"
     source.write_text(
-        "def f():\n    from pursuit_bench.training import runs\n    from pursuit_bench.study.plots import fig\n"
+        "def f():\n    from pursuit_bench.training import runs\n    from pursuit_bench.figures.plots import fig\n"
     )
-    assert {"pursuit_bench.training.runs", "pursuit_bench.study.plots"} <= imports(source)
+    assert {"pursuit_bench.training.runs", "pursuit_bench.figures.plots"} <= imports(source)
 
 
 def test_every_import_names_a_module_that_exists() -> None:
@@ -95,3 +101,48 @@ def test_every_import_names_a_module_that_exists() -> None:
                 if node.module not in MODULES:
                     stale.append(f"{module}: {node.module}")
     assert not stale, stale
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if layer(m) in GROUND))
+def test_the_ground_floor_imports_only_itself(module: str) -> None:
+    """``io`` and ``stats`` stand on nothing of ours: each imports only its own folder."""
+    own = layer(module)
+    other = sorted(t for t in imports(MODULES[module]) if t != "pursuit_bench" and layer(t) != own)
+    assert not other, f"{module} ({own}) imports {other}"
+
+
+def test_no_module_of_the_package_imports_an_old_path() -> None:
+    """The old names (io/moved.py) are for users for one release; the package itself uses the new ones."""
+    from pursuit_bench.io.moved import GONE, MOVED
+
+    old = set(MOVED) | set(GONE)
+    stale = sorted(f"{m}: {t}" for m, p in MODULES.items() for t in imports(p) if t in old)
+    assert not stale, stale
+
+
+@pytest.mark.parametrize("old", ["pursuit_bench.study.score", "pursuit_bench.pretrained.populations"])
+def test_an_old_path_gives_the_moved_module_and_warns(old: str) -> None:
+    import importlib
+    import subprocess
+    import sys
+
+    from pursuit_bench.io.moved import MOVED
+
+    # a fresh interpreter: in this one the old name may already be imported (no second warning)
+    parent, name = old.rsplit(".", 1)
+    code = (
+        "import warnings, importlib\n"
+        "warnings.simplefilter('error', DeprecationWarning)\n"
+        "import pursuit_bench\n"
+        "try:\n"
+        f"    from {parent} import {name}\n"
+        "except DeprecationWarning as e:\n"
+        "    print('warned:', e)\n"
+        "warnings.simplefilter('ignore', DeprecationWarning)\n"
+        f"from {parent} import {name} as old\n"
+        f"print('same:', old is importlib.import_module({MOVED[old]!r}))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert f"warned: {old} moved to {MOVED[old]}" in out
+    assert "same: True" in out
+    assert importlib.import_module(MOVED[old]).__name__ == MOVED[old]

@@ -27,7 +27,7 @@ from pursuit_bench.env.world import CONTACT_TOLERANCE, HALF_SIZE, RADIUS
 from pursuit_bench.rules.navigation import SAFETY_DISTANCE, avoid, navigate, parallel_navigation
 from pursuit_bench.rules.policies import AlwaysChase, FleeingPrey
 from pursuit_bench.training.evaluate import run_episodes
-from pursuit_bench.training.recording import Recorder
+from pursuit_bench.trajectories.recording import Recorder
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
 import make_paper_trajectories

@@ -11,13 +11,13 @@ import pytest
 from cli_helpers import cli_command, run_cli
 
 from pursuit_bench.agents.kinds import ScriptedAgent
+from pursuit_bench.analysis import robustness
 from pursuit_bench.env import task
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.perturbations import Perturbations, PerturbedEnv
 from pursuit_bench.env.vector import VectorPursuitEnv
 from pursuit_bench.env.world import DAMPING, DT
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
-from pursuit_bench.study import robustness
 from pursuit_bench.training.evaluate import evaluate_agents
 
 

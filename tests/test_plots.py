@@ -4,7 +4,7 @@ of, predators' lines that stay visible when their returns coincide, and what mod
 import matplotlib
 import numpy as np
 
-from pursuit_bench.study import plots
+from pursuit_bench.figures import plots
 
 matplotlib.use("Agg")
 

@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_helpers import run_cli
-from scipy import stats
+from scipy import stats as scipy_stats
 
-from pursuit_bench.study import pool, statistics
+from pursuit_bench import stats
+from pursuit_bench.reports import pool
 
 
 def test_the_equivalence_test_against_a_worked_example() -> None:
@@ -20,15 +21,15 @@ def test_the_equivalence_test_against_a_worked_example() -> None:
     df = (va + vb) ** 2 / (va**2 / 3 + vb**2 / 4)
     mean = np.mean(a) - np.mean(b)  # +0.0045
     # H0 "difference <= -0.05" rejected by t = (mean + 0.05) / se, H0 "difference >= +0.05" by (mean - 0.05) / se
-    p = max(stats.t.sf((mean + 0.05) / se, df), stats.t.cdf((mean - 0.05) / se, df))
-    result = statistics.equivalence(a, b, 0.05)
+    p = max(scipy_stats.t.sf((mean + 0.05) / se, df), scipy_stats.t.cdf((mean - 0.05) / se, df))
+    result = stats.equivalence(a, b, 0.05)
     assert result["p"] == pytest.approx(p) and result["p"] < 0.025
-    half = stats.t.ppf(0.975, df) * se  # the 1 - 2 alpha = 95 % Welch interval
+    half = scipy_stats.t.ppf(0.975, df) * se  # the 1 - 2 alpha = 95 % Welch interval
     assert result["bound"] == pytest.approx(max(abs(mean - half), abs(mean + half)))
-    assert statistics.equivalence(a, b, result["bound"] * 0.99)["p"] > 0.025  # just inside the bound: not shown
-    assert statistics.equivalence(a, b, result["bound"] * 1.01)["p"] < 0.025
+    assert stats.equivalence(a, b, result["bound"] * 0.99)["p"] > 0.025  # just inside the bound: not shown
+    assert stats.equivalence(a, b, result["bound"] * 1.01)["p"] < 0.025
     with pytest.raises(ValueError, match="margin=0"):
-        statistics.equivalence(a, b, 0)
+        stats.equivalence(a, b, 0)
 
 
 def test_welch_intervals_cover_at_the_study_s_eight_runs_a_kind() -> None:
@@ -39,10 +40,7 @@ def test_welch_intervals_cover_at_the_study_s_eight_runs_a_kind() -> None:
         b = rng.normal(0, spread_b, (draws, 8))
         truth = math.exp(0.125) if skew else 0.0
         held = np.mean(
-            [
-                lo <= truth <= hi
-                for lo, hi in (statistics.welch_difference(x, y)["ci"] for x, y in zip(a, b, strict=True))
-            ]
+            [lo <= truth <= hi for lo, hi in (stats.welch_difference(x, y)["ci"] for x, y in zip(a, b, strict=True))]
         )
         assert 0.935 <= held <= 0.965, (spread_b, skew, held)
 
@@ -64,7 +62,7 @@ def test_the_four_verdicts_on_made_up_runs() -> None:
     assert flat_ahead["difference"]["ci"][1] < 0 and flat_ahead["difference"]["p_holm"] <= 0.05
     # Holm over the family: the adjusted p-values are the raw ones stepped up
     raw = [r["difference"]["p"] for r in rows]
-    assert [r["difference"]["p_holm"] for r in rows] == pytest.approx(statistics.holm(raw).tolist())
+    assert [r["difference"]["p_holm"] for r in rows] == pytest.approx(stats.holm(raw).tolist())
 
 
 def test_a_pool_margin_is_the_mean_over_opponents_minus_the_better_fixed_mode() -> None:
@@ -249,7 +247,7 @@ def test_three_kinds_are_planned_and_compared_pairwise_against_an_independent_co
                 k: [r["pool"][str(entry["episodes"])]["m"]["panels"]["predator_0"][0] for r in runs if r["kind"] == k]
                 for k in (a, b)
             }
-            raw.append(stats.ttest_ind(values[a], values[b], equal_var=False).pvalue)
+            raw.append(scipy_stats.ttest_ind(values[a], values[b], equal_var=False).pvalue)
         m, order = len(raw), np.argsort(raw)
         holm, running = [0.0] * m, 0.0
         for rank, i in enumerate(order):

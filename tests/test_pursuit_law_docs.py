@@ -10,8 +10,8 @@ from types import ModuleType
 import numpy as np
 import pytest
 
-from pursuit_bench.study import guidance
-from pursuit_bench.study.synthetic_attacks import TrueLaw, attack
+from pursuit_bench.laws import guidance
+from pursuit_bench.laws.synthetic_attacks import TrueLaw, attack
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "pursuit-law.md"

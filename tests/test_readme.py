@@ -123,7 +123,7 @@ def test_the_residual_study_s_block_judges_only_the_settings_whose_runs_are_all_
 ) -> None:
     from test_rule_report import KINDS3, PAIRS3, three_kind_runs
 
-    from pursuit_bench.study import rule_study
+    from pursuit_bench.reports import rule_study
 
     where = tmp_path / "residual-study"
     (where / "runs").mkdir(parents=True)

@@ -15,8 +15,8 @@ from pursuit_bench.agents import QUICK, DQNLearner, HierarchicalPredator, Script
 from pursuit_bench.rules.navigation import parallel_navigation
 from pursuit_bench.rules.policies import FleeingPrey
 from pursuit_bench.training.evaluate import run_episodes
-from pursuit_bench.training.recording import RecordEpisodes, Recorder
 from pursuit_bench.training.train import TrainConfig, Trainer
+from pursuit_bench.trajectories.recording import RecordEpisodes, Recorder
 
 NAMES = ["predator_0", "predator_1", "prey_0"]
 
@@ -130,7 +130,7 @@ def test_no_rerun_call_when_recording_is_off(monkeypatch) -> None:
 
     for name in ("RecordingStream", "log", "send_columns", "init", "save", "set_time"):
         monkeypatch.setattr(rerun, name, forbidden)
-    monkeypatch.setattr("pursuit_bench.training.recording.rr", rerun)
+    monkeypatch.setattr("pursuit_bench.trajectories.recording.rr", rerun)
     Trainer(TrainConfig(condition="1p-low", episodes=5, num_envs=2)).run()
     run_episodes("1p-low", {"predator_0": CloseChaser(), "prey_0": ScriptedAgent("prey_0", FleeingPrey())}, 3, seed=0)
 

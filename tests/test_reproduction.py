@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from pursuit_bench.study import report
+from pursuit_bench.reports import reproduction as report
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "reproduction"

@@ -242,7 +242,7 @@ def test_analysis_reads_back_the_correction_taken() -> None:
     """`analyze`'s states of a residual predator: the correction is the direction taken minus the
     rule's, by mode and distance; zero for a fresh one, +1 for one forced to turn a step."""
     from pursuit_bench.agents import Prey
-    from pursuit_bench.study import analysis
+    from pursuit_bench.analysis import behaviour as analysis
 
     n_obs = task.obs_size(2, False)
 

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from pursuit_bench import pretrained
-from pursuit_bench.study import rule_study
+from pursuit_bench.reports import rule_study
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "studies" / "residual-value"
@@ -200,7 +200,7 @@ def test_a_tiny_run_of_the_driver_reuses_the_rule_study_s_runs(tmp_path: Path) -
     assert (
         copied.read_bytes() == (tmp_path / "rule-pop" / "1p-high" / "flat-seed1004" / "prey_0.safetensors").read_bytes()
     )
-    from pursuit_bench.pretrained import populations
+    from pursuit_bench.benchmark import populations
 
     loaded = populations.load("residual-study", "1p-high", folder=tmp_path / "population")
     assert len(loaded.members) == 13

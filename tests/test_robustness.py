@@ -1,4 +1,4 @@
-"""The robustness study's tests and tables (pursuit_bench/study/robustness.py, docs/robustness.md):
+"""The robustness study's tests and tables (pursuit_bench/analysis/robustness.py, docs/robustness.md):
 each family corrected by Holm, verdicts that follow the corrected tests, and a doc whose tables
 and quoted intervals are what the committed result gives."""
 
@@ -10,9 +10,11 @@ from typing import Any
 
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import stats as scipy_stats
 
-from pursuit_bench.study import pool, robustness, statistics
+from pursuit_bench import stats
+from pursuit_bench.analysis import robustness
+from pursuit_bench.reports import pool
 
 ROOT = Path(__file__).parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
@@ -158,14 +160,14 @@ def test_the_verdicts_follow_the_corrected_tests_in_each_family() -> None:
     assert [r["verdict"] for r in families["gaps"]["rows"]] == ["equivalent", "equivalent"]
     for name, family in families.items():  # each family corrected alone, by Holm
         rows = family["rows"]
-        assert [r["p_holm"] for r in rows] == pytest.approx(statistics.holm([r["p"] for r in rows]).tolist())
+        assert [r["p_holm"] for r in rows] == pytest.approx(stats.holm([r["p"] for r in rows]).tolist())
         if name != "margins":
-            adjusted = statistics.holm([r["equivalence"]["p"] for r in rows])
+            adjusted = stats.holm([r["equivalence"]["p"] for r in rows])
             assert [r["equivalence"]["p_holm"] for r in rows] == pytest.approx(adjusted.tolist())
     delay = changes["hierarchical", "delay"]
     runs = [s["name"] for s in sources if s["kind"] == "hierarchical"]
     values = [done[f"{n}|delay=6"]["margin"] - done[f"{n}|none"]["margin"] for n in runs]
-    assert delay["p"] == pytest.approx(stats.ttest_1samp(values, 0.0).pvalue)
+    assert delay["p"] == pytest.approx(scipy_stats.ttest_1samp(values, 0.0).pvalue)
     ladder = {(r["kind"], r["perturbation"], r["value"]): r for r in families["ladder"]["rows"]}
     for r in families["changes"]["rows"]:  # the strongest rung again, in the larger family
         assert ladder[r["kind"], r["perturbation"], r["value"]]["p_holm"] >= r["p_holm"]

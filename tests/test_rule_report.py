@@ -10,7 +10,7 @@ import pytest
 from cli_helpers import run_cli
 from scipy import stats
 
-from pursuit_bench.study import rule_report, rule_study
+from pursuit_bench.reports import rule_report, rule_study
 
 MEMBERS = ("FleeingPrey", "hierarchical-seed1000", "flat-seed1004")
 #: (condition, predator): the true pool return of each kind's runs
@@ -352,7 +352,7 @@ def test_three_kinds_are_compared_pairwise_in_one_holm_family_a_budget() -> None
 def test_a_run_s_corrections_are_counted_over_its_predators() -> None:
     """The corrections figure's counts, against counting by hand: 3 of 100 and 5 of 100 states
     corrected in the first bin (2 predators), none of 40 and 40 in the second; none in stalk."""
-    from pursuit_bench.study.plots import correction_shares, corrections_png
+    from pursuit_bench.figures.plots import correction_shares, corrections_png
 
     corrected, states = correction_shares({"predator_0": by_distance(3), "predator_1": by_distance(5)}, "chase")
     assert corrected.tolist() == [8.0, 0.0] and states.tolist() == [200.0, 80.0]

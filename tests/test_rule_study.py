@@ -11,7 +11,7 @@ import pytest
 
 from pursuit_bench import pretrained
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.study import rule_study
+from pursuit_bench.reports import rule_study
 from pursuit_bench.training.train_config import TrainConfig
 
 ROOT = Path(__file__).resolve().parents[1]

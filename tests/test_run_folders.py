@@ -17,7 +17,7 @@ from cli_helpers import cli_command, lines, run_cli, wait_for, wait_until
 import pursuit_bench
 from pursuit_bench.training import runs
 from pursuit_bench.training.evaluate import evaluate_agents
-from pursuit_bench.training.recording import TRAIL_ROWS_PER_CHUNK, EpisodeTrace, Recorder
+from pursuit_bench.trajectories.recording import TRAIL_ROWS_PER_CHUNK, EpisodeTrace, Recorder
 
 TINY = ["--num-envs", "4", "--learning-starts", "32", "--batch-size", "16", "--checkpoint-every", "5"]
 

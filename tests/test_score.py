@@ -19,11 +19,11 @@ from scipy.special import expit
 
 from pursuit_bench import pretrained
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
+from pursuit_bench.benchmark import populations, score
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.task import obs_size
-from pursuit_bench.pretrained import populations
+from pursuit_bench.reports import rule_study
 from pursuit_bench.rules.policies import AlwaysChase
-from pursuit_bench.study import rule_study, score
 from pursuit_bench.training.evaluate import evaluate_agents
 from pursuit_bench.training.train import build_agents
 

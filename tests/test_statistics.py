@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import stats as scipy_stats
 
-from pursuit_bench.study import report, statistics
+from pursuit_bench import stats
+from pursuit_bench.reports import reproduction as report
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -21,46 +22,46 @@ def test_the_paired_difference_and_its_t_interval_by_hand() -> None:
     mean = sum(d) / 4  # 0.075
     sd = math.sqrt(sum((x - mean) ** 2 for x in d) / 3)
     half = 3.182446305284263 * sd / 2  # t(0.975, 3) * sd / sqrt(4)
-    result = statistics.paired_difference(ours, theirs)
+    result = stats.paired_difference(ours, theirs)
     assert result["differences"] == pytest.approx(d)
     assert result["mean"] == pytest.approx(mean) and result["sd"] == pytest.approx(sd)
     assert result["ci"] == pytest.approx([mean - half, mean + half])
     t = mean / (sd / 2)
     assert result["t"] == pytest.approx(t)
-    reference = stats.ttest_rel(ours, theirs, alternative="greater")
+    reference = scipy_stats.ttest_rel(ours, theirs, alternative="greater")
     assert result["p_greater"] == pytest.approx(reference.pvalue)
-    assert result["p_less"] == pytest.approx(stats.ttest_rel(ours, theirs, alternative="less").pvalue)
+    assert result["p_less"] == pytest.approx(scipy_stats.ttest_rel(ours, theirs, alternative="less").pvalue)
     with pytest.raises(ValueError, match="same seeds"):
-        statistics.paired_difference([1.0, 2.0], [1.0])
+        stats.paired_difference([1.0, 2.0], [1.0])
 
 
 def test_welch_against_scipy_and_by_hand() -> None:
     a, b = [0.50, 0.42, 0.61, 0.47, 0.55], [0.30, 0.45, 0.20]
-    result = statistics.welch_difference(a, b)
+    result = stats.welch_difference(a, b)
     va, vb = np.var(a, ddof=1) / 5, np.var(b, ddof=1) / 3
     df = (va + vb) ** 2 / (va**2 / 4 + vb**2 / 2)
-    half = stats.t.ppf(0.975, df) * math.sqrt(va + vb)
+    half = scipy_stats.t.ppf(0.975, df) * math.sqrt(va + vb)
     assert result["mean"] == pytest.approx(np.mean(a) - np.mean(b))
     assert result["ci"] == pytest.approx([result["mean"] - half, result["mean"] + half])
-    assert result["p"] == pytest.approx(stats.ttest_ind(a, b, equal_var=False).pvalue)
+    assert result["p"] == pytest.approx(scipy_stats.ttest_ind(a, b, equal_var=False).pvalue)
 
 
 def test_holm_against_a_worked_example() -> None:
     # sorted: 0.005*4 = 0.02, 0.01*3 = 0.03, 0.03*2 = 0.06, 0.04*1 = 0.04 -> kept at 0.06
-    adjusted = statistics.holm([0.01, 0.04, 0.03, 0.005])
+    adjusted = stats.holm([0.01, 0.04, 0.03, 0.005])
     assert adjusted.tolist() == pytest.approx([0.03, 0.06, 0.06, 0.02])
-    assert statistics.holm([0.5, 0.9]).tolist() == [1.0, 1.0]  # capped at one
+    assert stats.holm([0.5, 0.9]).tolist() == [1.0, 1.0]  # capped at one
     with pytest.raises(ValueError, match=r"\[0, 1\]"):
-        statistics.holm([0.1, 1.5])
+        stats.holm([0.1, 1.5])
 
 
 def test_a_tie_is_never_a_win() -> None:
-    tied = statistics.paired_difference([0.3, 0.3, 0.3], [0.3, 0.3, 0.3])
+    tied = stats.paired_difference([0.3, 0.3, 0.3], [0.3, 0.3, 0.3])
     assert tied["p_greater"] == tied["p_less"] == 0.5 and tied["ci"] == [0.0, 0.0]
-    zero_mean = statistics.paired_difference([0.3, 0.5, 0.4], [0.4, 0.4, 0.4])
+    zero_mean = stats.paired_difference([0.3, 0.5, 0.4], [0.4, 0.4, 0.4])
     assert zero_mean["mean"] == pytest.approx(0.0) and zero_mean["p_greater"] == pytest.approx(0.5)
     comparisons = {b: {**tied, "p_greater_holm": 0.5, "p_less_holm": 0.5} for b in report.BASELINES}
-    assert statistics.classify(comparisons) == "not resolved"
+    assert stats.classify(comparisons) == "not resolved"
     # a seed-by-seed tie in the strict count, and equal means, are no wins either
     variant = {"mean": 0.3, "ci": None, "seeds": [0, 1], "values": [0.3, 0.3], "runs": []}
     table = [
@@ -84,41 +85,41 @@ def test_classification_follows_the_corrected_tests() -> None:
         return {"mean": mean, "p_greater_holm": greater, "p_less_holm": less, "p_equivalent_holm": equivalent}
 
     better = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(0.1, 0.02, 1.0)}
-    assert statistics.classify(better) == "better"
+    assert stats.classify(better) == "better"
     one_side = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(0.01, 0.2, 1.0)}
-    assert statistics.classify(one_side) == "not resolved"
+    assert stats.classify(one_side) == "not resolved"
     worse = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(-0.05, 1.0, 0.01)}
-    assert statistics.classify(worse) == "worse"
+    assert stats.classify(worse) == "worse"
     # the weaker baseline (the smaller deficit) significantly ahead, the stronger one too noisy to
     # say: a fixed mode beats the learned switch, so the panel is worse
     weaker_ahead = {"always_chase": comparison(-0.02, 1.0, 0.01), "always_stalk": comparison(-0.2, 1.0, 0.3)}
-    assert statistics.classify(weaker_ahead) == "worse"
+    assert stats.classify(weaker_ahead) == "worse"
     # ahead of one, within the margin of the other: equivalent; within the margin of neither: not
     level = {"always_chase": comparison(0.3, 0.001, 1.0), "always_stalk": comparison(0.01, 0.2, 0.5, 0.004)}
-    assert statistics.classify(level) == "equivalent"
+    assert stats.classify(level) == "equivalent"
     both_level = {"always_chase": comparison(0.0, 0.5, 0.5, 0.01), "always_stalk": comparison(0.0, 0.5, 0.5, 0.02)}
-    assert statistics.classify(both_level) == "equivalent"
+    assert stats.classify(both_level) == "equivalent"
     one_level = {"always_chase": comparison(0.0, 0.5, 0.5, 0.01), "always_stalk": comparison(0.0, 0.5, 0.5, 0.03)}
-    assert statistics.classify(one_level) == "not resolved"
+    assert stats.classify(one_level) == "not resolved"
     # significance wins over equivalence: ahead of both is better even where within the margin
     close_ahead = {b: comparison(0.02, 0.001, 1.0, 0.001) for b in ("always_chase", "always_stalk")}
-    assert statistics.classify(close_ahead) == "better"
+    assert stats.classify(close_ahead) == "better"
 
 
 def test_paired_equivalence_against_a_worked_example() -> None:
     # differences 0.01, 0.03, -0.01, 0.02, 0.00: mean 0.01, sd 0.015811, se 0.0070711, 4 df
     d = [0.01, 0.03, -0.01, 0.02, 0.00]
-    result = statistics.paired_equivalence(d, 0.05)
+    result = stats.paired_equivalence(d, 0.05)
     # H0 difference >= +0.05: t = (0.01 - 0.05) / 0.0070711 = -5.6569, P(T4 <= t) = 0.0024063;
     # H0 difference <= -0.05: t = 8.4853, smaller; the larger p is the first
     assert result["p"] == pytest.approx(0.0024063, abs=2e-7)
     # the 95 % t-interval 0.01 ± 2.7764 * 0.0070711 = [-0.009632, 0.029632]
     assert result["bound"] == pytest.approx(0.029632, abs=1e-6)
-    assert statistics.paired_equivalence(d, result["bound"] * 0.99)["p"] > 0.025
-    assert statistics.paired_equivalence(d, result["bound"] * 1.01)["p"] < 0.025
-    assert statistics.paired_equivalence([0.02] * 4, 0.05)["p"] == 0.0  # no spread, inside
+    assert stats.paired_equivalence(d, result["bound"] * 0.99)["p"] > 0.025
+    assert stats.paired_equivalence(d, result["bound"] * 1.01)["p"] < 0.025
+    assert stats.paired_equivalence([0.02] * 4, 0.05)["p"] == 0.0  # no spread, inside
     with pytest.raises(ValueError, match="margin"):
-        statistics.paired_equivalence(d, -0.1)
+        stats.paired_equivalence(d, -0.1)
 
 
 def test_the_t_interval_covers_what_it_claims() -> None:
@@ -127,8 +128,8 @@ def test_the_t_interval_covers_what_it_claims() -> None:
     the 95 % t-interval holds the true mean 95 % of the time, within two points."""
     sigma = 0.25
     for n in (3, 5, 10):
-        normal = statistics.coverage(lambda rng, shape: rng.normal(0.1, 0.05, shape), 0.1, n, 4000, seed=n)
-        skewed = statistics.coverage(
+        normal = stats.coverage(lambda rng, shape: rng.normal(0.1, 0.05, shape), 0.1, n, 4000, seed=n)
+        skewed = stats.coverage(
             lambda rng, shape: rng.lognormal(0.0, sigma, shape), math.exp(sigma**2 / 2), n, 4000, seed=n
         )
         assert abs(normal - 0.95) <= 0.02, (n, normal)
@@ -137,14 +138,14 @@ def test_the_t_interval_covers_what_it_claims() -> None:
 
 def test_seeds_for_power_against_the_textbook_value() -> None:
     # a paired t-test, effect size 0.5, two-sided 5 % (one-sided 2.5 %), 80 % power: 34 pairs
-    assert statistics.seeds_for_power(sd=1.0, delta=0.5) == 34
-    assert statistics.seeds_for_power(sd=0.1, delta=0.05) == 34
-    assert statistics.seeds_for_power(sd=0.1, delta=0.05, alpha=0.05 / 44) > 34
+    assert stats.seeds_for_power(sd=1.0, delta=0.5) == 34
+    assert stats.seeds_for_power(sd=0.1, delta=0.05) == 34
+    assert stats.seeds_for_power(sd=0.1, delta=0.05, alpha=0.05 / 44) > 34
     # what n seeds could have detected: the inverse of seeds_for_power
-    delta = statistics.detectable(sd=1.0, n=34)
+    delta = stats.detectable(sd=1.0, n=34)
     assert 0.48 < delta <= 0.5
     with pytest.raises(ValueError, match="delta > 0"):
-        statistics.seeds_for_power(sd=1.0, delta=0.0)
+        stats.seeds_for_power(sd=1.0, delta=0.0)
 
 
 def test_the_probability_of_improvement_is_mann_whitney_averaged_over_panels() -> None:
@@ -153,17 +154,17 @@ def test_the_probability_of_improvement_is_mann_whitney_averaged_over_panels() -
     ys = [rng.normal(0.0, 1.0, 7).round(1) for _ in range(4)]
     naive = np.mean(
         [
-            stats.mannwhitneyu(x, y, alternative="greater").statistic / (len(x) * len(y))
+            scipy_stats.mannwhitneyu(x, y, alternative="greater").statistic / (len(x) * len(y))
             for x, y in zip(xs, ys, strict=True)
         ]
     )
-    assert statistics.probability_of_improvement(xs, ys) == pytest.approx(naive)
-    result = statistics.improvement_interval(xs, ys, resamples=500)
+    assert stats.probability_of_improvement(xs, ys) == pytest.approx(naive)
+    result = stats.improvement_interval(xs, ys, resamples=500)
     assert result["ci"][0] < result["value"] < result["ci"][1]
     # the resamples come from the seed: another seed draws others, the same seed the same ones
-    other = statistics.improvement_interval(xs, ys, seed=1, resamples=500)
+    other = stats.improvement_interval(xs, ys, seed=1, resamples=500)
     assert other["value"] == result["value"] and other["ci"] != result["ci"]
-    assert statistics.improvement_interval(xs, ys, seed=1, resamples=500) == other
+    assert stats.improvement_interval(xs, ys, seed=1, resamples=500) == other
 
 
 def test_the_slope_test_tells_a_trend_from_a_plateau() -> None:
@@ -172,42 +173,42 @@ def test_the_slope_test_tells_a_trend_from_a_plateau() -> None:
     rising = [0.02 * x + rng.normal(0, 0.005, 3) for _ in range(10)]
     flat = [0.3 + rng.normal(0, 0.002, 3) for _ in range(10)]
     noisy = [0.3 + (-1) ** k * 0.05 * (x - 12.75) for k in range(10)]  # seeds disagree: slopes ±0.05
-    assert statistics.slope_test(rising, x, tolerance=0.004)["verdict"] == "rising"
-    assert statistics.slope_test(flat, x, tolerance=0.004)["verdict"] == "flat"
-    unresolved = statistics.slope_test(noisy, x, tolerance=0.004)
+    assert stats.slope_test(rising, x, tolerance=0.004)["verdict"] == "rising"
+    assert stats.slope_test(flat, x, tolerance=0.004)["verdict"] == "flat"
+    unresolved = stats.slope_test(noisy, x, tolerance=0.004)
     assert unresolved["verdict"] == "not resolved" and unresolved["detectable"] > 0.004
 
 
 def test_the_median_interval_against_the_exact_bootstrap_distribution() -> None:
-    assert statistics.median_interval([1.0, 2.0, 3.0, 4.0], seed=0) is None
-    assert statistics.median_interval([2.0] * 8, seed=0) is None
+    assert stats.median_interval([1.0, 2.0, 3.0, 4.0], seed=0) is None
+    assert stats.median_interval([2.0] * 8, seed=0) is None
     # 0, 1, …, 10: a resample's median is at most k when 6 or more of its 11 draws are, so
     # P(median <= k) = P(Binomial(11, (k + 1) / 11) >= 6): 0.007 at k = 1, 0.051 at 2, 0.949 at
     # 7, 0.993 at 8. The 2.5 % and 97.5 % points of the bootstrap distribution are 2 and 8, more
     # than five binomial standard errors of 2000 resamples from the steps: found whatever the seed.
     values = np.arange(11.0)
     for seed in (0, 1, 2, 3):
-        assert statistics.median_interval(values, seed=seed) == [2.0, 8.0]
+        assert stats.median_interval(values, seed=seed) == [2.0, 8.0]
     # the resamples come from the seed: on 200 values (at 20 or 51 the interval's ends sit on the
     # same order statistics whatever the seed) another seed gives another interval, the same seed
     # the same one
     skewed = np.random.default_rng(0).lognormal(0.0, 0.5, 200)
-    first, second = statistics.median_interval(skewed, seed=0), statistics.median_interval(skewed, seed=1)
+    first, second = stats.median_interval(skewed, seed=0), stats.median_interval(skewed, seed=1)
     assert first is not None and second is not None and first != second
-    assert statistics.median_interval(skewed, seed=1) == second
+    assert stats.median_interval(skewed, seed=1) == second
 
 
 @pytest.mark.slow
 @pytest.mark.long
 def test_statistics_md_prints_what_its_script_gives() -> None:
-    """docs/statistics.md's coverage table and skewness figures are what
+    """docs/stats.md's coverage table and skewness figures are what
     scripts/interval_coverage.py computes (seeded: the same every time)."""
     sys.path.insert(0, str(ROOT / "scripts"))
     try:
         import interval_coverage
     finally:
         sys.path.remove(str(ROOT / "scripts"))
-    text = (ROOT / "docs" / "statistics.md").read_text()
+    text = (ROOT / "docs" / "stats.md").read_text()
     assert interval_coverage.coverage_markdown() in text
     figures = interval_coverage.skewness_figures()
     ours, normal, mild, strong = (f"{v:+.2f}".replace("-", "−") for v in figures.values())
@@ -260,11 +261,11 @@ def _boschloo_by_hand(a: int, n_a: int, b: int, n_b: int) -> float:
     ii, jj = np.meshgrid(np.arange(n_a + 1), np.arange(n_b + 1), indexing="ij")
     total = ii + jj
     # Fisher's one-sided p of every outcome: P(X >= i) and P(X <= i), X hypergeometric given i + j
-    greater = stats.hypergeom.sf(ii - 1, n_a + n_b, total, n_a)
-    less = stats.hypergeom.cdf(ii, n_a + n_b, total, n_a)
+    greater = scipy_stats.hypergeom.sf(ii - 1, n_a + n_b, total, n_a)
+    less = scipy_stats.hypergeom.cdf(ii, n_a + n_b, total, n_a)
     grid = np.linspace(0.0005, 0.9995, 2000)
-    p_a = stats.binom.pmf(np.arange(n_a + 1)[None], n_a, grid[:, None])
-    p_b = stats.binom.pmf(np.arange(n_b + 1)[None], n_b, grid[:, None])
+    p_a = scipy_stats.binom.pmf(np.arange(n_a + 1)[None], n_a, grid[:, None])
+    p_b = scipy_stats.binom.pmf(np.arange(n_b + 1)[None], n_b, grid[:, None])
     weights = p_a[:, :, None] * p_b[:, None, :]  # grid × outcomes of a × outcomes of b
     one_sided = []
     for statistic in (greater, less):
@@ -277,11 +278,11 @@ def _boschloo_by_hand(a: int, n_a: int, b: int, n_b: int) -> float:
 def test_the_difference_of_two_failure_shares_is_boschloo_s_test_of_two_binomial_samples(
     a: int, n_a: int, b: int, n_b: int
 ) -> None:
-    result = statistics.share_difference(a, n_a, b, n_b)
+    result = stats.share_difference(a, n_a, b, n_b)
     assert result["difference"] == pytest.approx(a / n_a - b / n_b)
     assert result["p"] == pytest.approx(_boschloo_by_hand(a, n_a, b, n_b), rel=1e-4)
     # the same counts read the other way round (the kinds as rows) give another p: the test tells them apart
-    swapped = statistics.share_difference(a, a + b, n_a - a, n_a - a + n_b - b)["p"]
+    swapped = stats.share_difference(a, a + b, n_a - a, n_a - a + n_b - b)["p"]
     assert swapped != pytest.approx(result["p"], rel=0.05)
 
 
@@ -291,7 +292,7 @@ def test_measures_equal_but_for_their_last_bits_are_ties() -> None:
     above = np.array([summed, 0.9])
     below = np.array([0.6, 0.2])
     # summed vs 0.6 is a tie (half); the other three pairs are clear wins
-    assert statistics.probability_of_improvement([above], [below]) == pytest.approx(3.5 / 4)
+    assert stats.probability_of_improvement([above], [below]) == pytest.approx(3.5 / 4)
 
 
 def _study_coverage():  # type: ignore[no-untyped-def]

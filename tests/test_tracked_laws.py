@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from cli_helpers import run_cli
 
-from pursuit_bench.study import synthetic_attacks, tracked_laws
+from pursuit_bench.laws import synthetic_attacks, tracked_laws
 
 load_poses = pytest.importorskip("movement.io.load_poses")
 pytestmark = pytest.mark.filterwarnings("ignore:numpy.ndarray size changed:RuntimeWarning")  # netCDF4's wheel

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 from cli_helpers import run_cli
 
-from pursuit_bench.training.recording import EpisodeTrace
-from pursuit_bench.training.trajectory_csv import COLUMNS, TrajectoryCSV
+from pursuit_bench.trajectories.recording import EpisodeTrace
+from pursuit_bench.trajectories.trajectory_csv import COLUMNS, TrajectoryCSV
 
 
 def _trace() -> EpisodeTrace:

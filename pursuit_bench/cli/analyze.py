@@ -1,5 +1,5 @@
 """``pursuit-bench analyze``: Fig. 3 of a run (or of the shipped agents) and the chase modes of a
-sweep (:mod:`pursuit_bench.study.fig3`).
+sweep (:mod:`pursuit_bench.analysis.fig3`).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def analyze(
         return
     try:
         with trained_agents(where, pretrained, threads, obstacles) as (config, agents, _):
-            from pursuit_bench.study import fig3
+            from pursuit_bench.analysis import fig3
 
             result = fig3.analyze_run(where, config, agents, episodes, seed)
     except ValueError as error:  # RunBusy, not a run folder, not trained, not hierarchical
@@ -66,7 +66,7 @@ def analyze(
 def _analyze_sweep(sweep_folder: Path, episodes: int, seed: int, threads: int) -> None:
     import torch
 
-    from pursuit_bench.study import fig3
+    from pursuit_bench.analysis import fig3
 
     torch.set_num_threads(threads)
     try:

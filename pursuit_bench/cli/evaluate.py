@@ -169,8 +169,8 @@ def _held_out(
     FleeingPrey), and ``about`` with the other side's result: OTHER's predators against the
     run's prey by the same protocol (its ``prey_check`` scores the run's prey)."""
     from pursuit_bench.agents.kinds import ScriptedAgent
+    from pursuit_bench.analysis.robustness import check_opponents
     from pursuit_bench.rules.policies import FleeingPrey
-    from pursuit_bench.study.robustness import check_opponents
     from pursuit_bench.training.evaluate import evaluate_agents
 
     prey = agents["prey_0"]
@@ -243,7 +243,7 @@ def _evaluate_run(
     previous files stay and the exit status is 130 or 143; after it the new files are complete
     and the status is 0."""
     from pursuit_bench.agents import external
-    from pursuit_bench.study.plots import reward_bars_png
+    from pursuit_bench.figures.plots import reward_bars_png
     from pursuit_bench.training.evaluate import evaluate_into
 
     kind = None

@@ -1,4 +1,4 @@
-"""``pursuit-bench law``: which pursuit law the predators follow (:mod:`pursuit_bench.study.pursuit_laws`),
+"""``pursuit-bench law``: which pursuit law the predators follow (:mod:`pursuit_bench.laws.pursuit_laws`),
 for a run, the shipped agents or every run of a sweep.
 """
 
@@ -75,7 +75,7 @@ def law(
         return
     try:
         with trained_agents(where, pretrained, threads, obstacles) as (config, agents, _):
-            from pursuit_bench.study import pursuit_laws
+            from pursuit_bench.laws import pursuit_laws
 
             name = where.name if pretrained is None else f"shipped agents of {pretrained}"
             result = pursuit_laws.analyse(
@@ -105,7 +105,7 @@ def _law_tracks(
     out: Path | None,
     seed: int,
 ) -> None:
-    """law --tracks: the laws fitted to a tracked pursuer and target (study/tracked_laws.py)."""
+    """law --tracks: the laws fitted to a tracked pursuer and target (laws/tracked_laws.py)."""
     if pursuer is None or target is None:
         raise BadInput("--tracks needs --pursuer NAME and --target NAME (individuals of the dataset)")
     if not path.is_file():
@@ -114,7 +114,7 @@ def _law_tracks(
 
     from pursuit_bench.io import tracks as tracks_io
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.study import tracked_laws
+    from pursuit_bench.laws import tracked_laws
 
     try:
         if source_software is None:
@@ -164,8 +164,8 @@ def _line(fits: dict[str, Any]) -> str:
 
 
 def _write(folder: Path, result: dict[str, Any], title: str) -> None:
+    from pursuit_bench.figures.plots import law_png
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study.plots import law_png
 
     atomic_write_bytes(folder / "law.png", law_png(result, title))
     atomic_write_text(folder / "law.json", json.dumps(result) + "\n")
@@ -175,7 +175,7 @@ def _law_sweep(sweep: Path, episodes: int, seed: int, threads: int) -> None:
     import torch
 
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.study import pursuit_laws
+    from pursuit_bench.laws import pursuit_laws
     from pursuit_bench.training import runs
 
     torch.set_num_threads(threads)

@@ -1,6 +1,6 @@
 """``pursuit-bench pool``: the learned predator kinds of a sweep (hierarchical, flat, residual: any
 two or more) judged against one pool of opponents at every kept budget, pairwise
-(:mod:`pursuit_bench.study.pool`).
+(:mod:`pursuit_bench.reports.pool`).
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def pool(
         if not (where / "sweep.json").is_file():
             raise BadInput(f"{where}: not a sweep folder (no sweep.json)")
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.study import pool as pools
+    from pursuit_bench.reports import pool as pools
 
     sources, budgets, seeds = _sources(sweeps)
     try:
@@ -100,7 +100,7 @@ def pool(
 def _sources(sweeps: tuple[Path, ...]) -> tuple[list[dict[str, Any]], list[int], list[int]]:
     """The learned kinds' runs of the sweeps (each finished, with every kept checkpoint),
     their common budgets (two or more: learning against budget needs them) and seeds."""
-    from pursuit_bench.study.pool import ORDER
+    from pursuit_bench.reports.pool import ORDER
     from pursuit_bench.training import runs
     from pursuit_bench.training.sweep import PLAN, SweepPlan, run_status
 

@@ -1,5 +1,5 @@
 """``pursuit-bench report``: the claim judged panel by panel over a sweep's seeds (verdicts, paired
-differences, per-seed counts, power, convergence: :func:`pursuit_bench.study.report.write`), or the
+differences, per-seed counts, power, convergence: :func:`pursuit_bench.reports.reproduction.write`), or the
 learning curves and a summary of one run.
 """
 
@@ -28,7 +28,7 @@ def report(where: Path, out: Path | None) -> None:
     compared pairwise as residual-study.json names them."""
     if not where.is_dir():  # before the statistics and the figures are imported: a refusal comes at once
         raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
-    from pursuit_bench.study import report as reports
+    from pursuit_bench.reports import reproduction as reports
 
     if out is not None:
         check_out_folder(out)
@@ -65,7 +65,7 @@ def report(where: Path, out: Path | None) -> None:
 
 def _report_pool(where: Path, out: Path) -> None:
     """A pool study (``pursuit-bench pool``): its report rewritten from pool.json."""
-    from pursuit_bench.study import pool
+    from pursuit_bench.reports import pool
 
     try:
         summary = pool.write_report(pool.load(where / "pool.json"), out)
@@ -79,7 +79,7 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
     """The rule study (issue 47), or a study of more kinds in its format (``stem``.json names the
     kinds, the comparisons and how far a run's margin must be from its twin's to differ): its report
     from the judged runs' compact results (runs/)."""
-    from pursuit_bench.study import rule_report
+    from pursuit_bench.reports import rule_report
 
     try:
         study = rule_report.study_of(where, stem)
@@ -93,9 +93,9 @@ def _report_rule_study(where: Path, out: Path, stem: str = "rule-study") -> None
 
 def _report_run(folder: Path, out: Path) -> None:
     """One run: what was trained, how far, its last episodes and its evaluation, and curves.png."""
+    from pursuit_bench.figures.plots import curves_png
     from pursuit_bench.io.files import atomic_write_bytes
-    from pursuit_bench.study import report as reports
-    from pursuit_bench.study.plots import curves_png
+    from pursuit_bench.reports import reproduction as reports
 
     config = json.loads((folder / "config.json").read_text())["train"]
     metrics = folder / "metrics.jsonl"

@@ -1,5 +1,5 @@
 """``pursuit-bench robust``: the predators' margin over the baselines under a ladder of
-perturbations, and cross-play over a sweep's seeds (:mod:`pursuit_bench.study.robustness`).
+perturbations, and cross-play over a sweep's seeds (:mod:`pursuit_bench.analysis.robustness`).
 """
 
 from __future__ import annotations
@@ -62,9 +62,9 @@ def robust(
             except ValueError as error:
                 raise BadInput(str(error)) from None
     where.mkdir(parents=True, exist_ok=True)
+    from pursuit_bench.analysis import robustness
+    from pursuit_bench.figures.plots import robust_png
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study import robustness
-    from pursuit_bench.study.plots import robust_png
 
     def progress(done: int, total: int) -> None:
         click.echo(f"robust: {done} of {total} evaluations", err=True)

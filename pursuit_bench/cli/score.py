@@ -1,5 +1,5 @@
 """``pursuit-bench score``: an agent against a shipped population of held-out opponents, with
-normalized scores per condition and their aggregate (:mod:`pursuit_bench.study.score`,
+normalized scores per condition and their aggregate (:mod:`pursuit_bench.benchmark.score`,
 docs/leaderboard.md)."""
 
 from __future__ import annotations
@@ -50,10 +50,10 @@ def score(
     chosen = names(conditions, list(CONDITIONS), "conditions")
     import torch
 
+    from pursuit_bench.benchmark import populations
+    from pursuit_bench.benchmark import score as scoring
     from pursuit_bench.cli.progress import Progress
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.pretrained import populations
-    from pursuit_bench.study import score as scoring
 
     torch.set_num_threads(threads)
     try:

@@ -115,7 +115,7 @@ def sweep(
     kept = episode_counts(keep_checkpoints)
     check_out_folder(out)
 
-    from pursuit_bench.study.plots import reward_bars_png
+    from pursuit_bench.figures.plots import reward_bars_png
     from pursuit_bench.training import sweep as sweeps
 
     # signals are caught from before the plan is written: one that lands before the workers start

@@ -25,13 +25,13 @@ from pursuit_bench.env.world import MAX_BLOCKS, Backend
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 from pursuit_bench.training import runs
-from pursuit_bench.training.movement_tracks import MovementTracks
-from pursuit_bench.training.recording import EpisodeSink, EpisodeTraces, Recorder, Sinks
 from pursuit_bench.training.train_config import TrainConfig
-from pursuit_bench.training.trajectory_csv import TrajectoryCSV
+from pursuit_bench.trajectories.movement_tracks import MovementTracks
+from pursuit_bench.trajectories.recording import EpisodeSink, EpisodeTraces, Recorder, Sinks
+from pursuit_bench.trajectories.trajectory_csv import TrajectoryCSV
 
 #: Draws an evaluation's figure: ``figure(result, run name) -> PNG bytes`` (the command line
-#: passes ``study.plots.reward_bars_png``; this layer draws nothing itself).
+#: passes ``figures.plots.reward_bars_png``; this layer draws nothing itself).
 Figure = Callable[[dict[str, Any], str], bytes]
 
 
@@ -709,8 +709,8 @@ def evaluate_into(
     raises stops the evaluation with the previous files untouched. ``predator_kind`` names the
     predators in the result (default: the config's); ``perturbations`` change the world and the
     senses of every variant alike (:mod:`pursuit_bench.env.perturbations`); with ``csv``, the
-    trained variant's trajectories go to ``paths["csv"]`` as well (``training/trajectory_csv.py``);
-    with ``tracks``, to the folder ``paths["tracks"]`` as movement datasets (``training/movement_tracks.py``)."""
+    trained variant's trajectories go to ``paths["csv"]`` as well (``trajectories/trajectory_csv.py``);
+    with ``tracks``, to the folder ``paths["tracks"]`` as movement datasets (``trajectories/movement_tracks.py``)."""
     partial = {kind: path.with_name(f".{path.name}.tmp") for kind, path in paths.items()}
     recorder: EpisodeSink | None = None
     try:

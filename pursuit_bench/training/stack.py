@@ -16,8 +16,8 @@ from typing import Any
 
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.training import runs
-from pursuit_bench.training.recording import Recorder
 from pursuit_bench.training.train import EpisodeRecord, TrainConfig, Trainer
+from pursuit_bench.trajectories.recording import Recorder
 
 
 @dataclass

@@ -33,10 +33,10 @@ from pursuit_bench.agents.registry import KINDS
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.vector import VectorPursuitEnv, put_actions
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
-from pursuit_bench.training.recording import EpisodeTrace, EpisodeTraces, Recorder
 from pursuit_bench.training.train_config import (
     TrainConfig as TrainConfig,  # the configuration lives apart: no torch there
 )
+from pursuit_bench.trajectories.recording import EpisodeTrace, EpisodeTraces, Recorder
 
 
 def member_seed(run_seed: int, agent: int) -> int:

@@ -176,7 +176,10 @@ def population_name(budget: int) -> str:
 
 def committed_member(condition: str, member: str, root: Path | None = None) -> Path:
     """The committed prey of a rule-study member (its 15,000-episode weights)."""
-    from pursuit_bench.pretrained import populations
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.benchmark import populations
+    except ImportError:
+        from pursuit_bench.pretrained import populations
 
     base = root if root is not None else populations.FOLDER
     return base / RULE_POPULATION / condition / member / "prey_0.safetensors"

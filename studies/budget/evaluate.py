@@ -60,8 +60,8 @@ def replay(run: Path, condition: str, committed: Path, first: int = BUDGETS[0]) 
     """SystemExit unless this build, playing the run's checkpoint at ``first`` episodes (the rule
     study's end of training) against the rule study's population, gives the rule study's
     committed result there bit for bit."""
-    from pursuit_bench.pretrained import populations
-    from pursuit_bench.study import rule_study
+    from pursuit_bench.benchmark import populations
+    from pursuit_bench.reports import rule_study
 
     path = committed / f"{run.name}.json.gz"
     if not path.exists():
@@ -85,7 +85,7 @@ def evaluate(
     seed: int = EVAL_SEED,
 ) -> dict[str, Any]:
     """The run's evaluations by the protocol (the module's docstring says what each holds)."""
-    from pursuit_bench.study import rule_study
+    from pursuit_bench.reports import rule_study
     from pursuit_bench.training import runs
     from pursuit_bench.training.evaluate import PROTOCOL, Actor, evaluate_agents
 

@@ -203,8 +203,12 @@ def replay_check(args: Any, condition: str, run: Path) -> None:
     budget bit for bit (every member, every variant). What it played is kept in ``--work/replay/``."""
     import gzip
 
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
+
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.study import rule_study
 
     committed_path = args.rule_results / f"{run.name}.json.gz"
     if not committed_path.exists():
@@ -524,7 +528,10 @@ def main() -> int:
         print(f"--judged-seeds {args.judged_seeds}: expected {design.MIN_CUT_SEEDS} to 10", file=sys.stderr)
         return 2
     if args.rule_population is None:
-        from pursuit_bench.pretrained import populations
+        try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+            from pursuit_bench.benchmark import populations
+        except ImportError:
+            from pursuit_bench.pretrained import populations
 
         args.rule_population = populations.FOLDER / design.RULE_POPULATION
     if args.workers < 1:

@@ -13,8 +13,12 @@ import hashlib
 import sys
 from typing import Any
 
+try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+    from pursuit_bench.reports import rule_study
+except ImportError:
+    from pursuit_bench.study import rule_study
+
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.study import rule_study
 
 #: The rule study's build (``studies/rule-value/build.json``), which trained the hierarchical and
 #: flat runs reused here: its commit and ``studies/rule-value/run.py``'s fingerprint of the

@@ -297,9 +297,13 @@ def play(
     population is fixed to the rule study's nine), so a member's evaluation is the same here and
     there. A member is loaded by ``rule_study.load_member``, with its range readings where it
     trained among obstacles (this driver loaded them itself while the package's did not)."""
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports.rule_study import load_member
+    except ImportError:
+        from pursuit_bench.study.rule_study import load_member
+
     from pursuit_bench.agents.kinds import ScriptedAgent
     from pursuit_bench.rules.policies import FleeingPrey
-    from pursuit_bench.study.rule_study import load_member
     from pursuit_bench.training import runs
     from pursuit_bench.training.evaluate import evaluate_agents
 
@@ -337,8 +341,12 @@ def play(
 def ladders(folder: Path, setting: str, episodes: int) -> dict[str, Any]:
     """The run's margin against its own prey at the end of training, unperturbed and on each rung
     of the study's ladders (``pursuit-bench robust``'s evaluation)."""
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.analysis import robustness
+    except ImportError:
+        from pursuit_bench.study import robustness
+
     from pursuit_bench.env.perturbations import Perturbations
-    from pursuit_bench.study import robustness
 
     levels = {robustness.NONE: Perturbations()}
     for name, rungs in design.LADDERS.items():
@@ -353,7 +361,11 @@ def corrections(folder: Path, episodes: int) -> dict[str, Any]:
     t-SNE: per predator, the share of states corrected and the correction by distance and mode."""
     import numpy as np
 
-    from pursuit_bench.study import analysis
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.analysis import behaviour as analysis
+    except ImportError:
+        from pursuit_bench.study import analysis
+
     from pursuit_bench.training import runs
 
     config, agents, _ = runs.described(folder)
@@ -389,7 +401,11 @@ def judge(
     again and found identical); else every member is played here."""
     import torch
 
-    from pursuit_bench.study import rule_study
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
+
     from pursuit_bench.training.evaluate import PROTOCOL
 
     torch.set_num_threads(1)
@@ -439,7 +455,10 @@ def judge(
 
 
 def own_runs(out: Path, setting: str) -> list[dict[str, Any]]:
-    from pursuit_bench.study import rule_study
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
 
     return [r for r in rule_study.read_runs(out) if r.get("setting") == setting]
 
@@ -447,7 +466,10 @@ def own_runs(out: Path, setting: str) -> list[dict[str, Any]]:
 def rule_count(args: Any, condition: str) -> int | None:
     """How many judged runs a kind the rule study has in ``condition`` once it is done there (its
     seed rule satisfied by its evaluated runs), else None."""
-    from pursuit_bench.study import rule_study
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
 
     runs = [r for r in rule_study.read_runs(args.rule_results / "runs") if r["condition"] == condition]
     runs = [r for r in runs if r.get("study") is None]  # the rule study's own files only
@@ -466,7 +488,10 @@ def rule_folder(args: Any, setting: str, kind: str, seed: int) -> Path | None:
 def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -> str:
     """Train, reuse and evaluate a setting's judged runs, seed step by seed step as the seed rule
     asks; returns "done", "stop" or what it waits for."""
-    from pursuit_bench.study.jobs import run_jobs
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.training.jobs import run_jobs
+    except ImportError:
+        from pursuit_bench.study.jobs import run_jobs
 
     out = args.results / "runs"
     out.mkdir(parents=True, exist_ok=True)
@@ -640,7 +665,10 @@ def drive(args: Any, settings: list[str]) -> int:
     args.results.mkdir(parents=True, exist_ok=True)
     marker = args.results / "residual-study.json"  # what `pursuit-bench report` knows the folder by
     if not marker.exists():
-        from pursuit_bench.study import rule_study
+        try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+            from pursuit_bench.reports import rule_study
+        except ImportError:
+            from pursuit_bench.study import rule_study
 
         about = {
             "format": rule_study.FORMAT,

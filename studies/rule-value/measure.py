@@ -25,10 +25,14 @@ from typing import Any
 import numpy as np
 import torch
 
+try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+    from pursuit_bench.reports import rule_study
+except ImportError:
+    from pursuit_bench.study import rule_study
+
 from pursuit_bench import pretrained
 from pursuit_bench.agents.config import REPRODUCTION
 from pursuit_bench.io.files import atomic_write_text
-from pursuit_bench.study import rule_study
 from pursuit_bench.training.evaluate import evaluate_agents
 from pursuit_bench.training.train import TrainConfig, Trainer
 

@@ -103,7 +103,11 @@ def sweep(folder: Path, plan: Any, args: Any, stop: list[bool]) -> bool:
 
 
 def population(args: Any, stop: list[bool], conditions: list[str], current: dict[str, str]) -> bool:
-    from pursuit_bench.study import rule_study
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
+
     from pursuit_bench.training import runs
 
     # every condition's population written (committed): nothing to train; if only some are, the
@@ -142,7 +146,10 @@ def evaluate(
     """One judged run against its population, its compact result written (a worker's job)."""
     import torch
 
-    from pursuit_bench.study import rule_study
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
 
     torch.set_num_threads(1)
     options = {} if trial is None else {"episodes": trial[0], "budgets": tuple(trial[1])}
@@ -152,9 +159,16 @@ def evaluate(
 
 
 def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str, str]) -> bool:
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.training.jobs import run_jobs
+    except ImportError:
+        from pursuit_bench.study.jobs import run_jobs
+
     from pursuit_bench.io.files import atomic_write_text
-    from pursuit_bench.study import rule_study
-    from pursuit_bench.study.jobs import run_jobs
 
     out = args.results / "runs"
     out.mkdir(parents=True, exist_ok=True)
@@ -233,8 +247,12 @@ def main() -> int:
     parser.add_argument("--budgets", default=None, help="(tests only) e.g. 4,8; the last is --episodes")
     parser.add_argument("--eval-episodes", type=int, default=None, help="(tests only, with --budgets)")
     args = parser.parse_args()
+    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        from pursuit_bench.reports import rule_study
+    except ImportError:
+        from pursuit_bench.study import rule_study
+
     from pursuit_bench.env.conditions import CONDITIONS
-    from pursuit_bench.study import rule_study
 
     chosen = list(CONDITIONS) if args.conditions == "all" else args.conditions.split(",")
     if unknown := [c for c in chosen if c not in CONDITIONS]:

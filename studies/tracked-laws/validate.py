@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from pursuit_bench.io import tracks
-from pursuit_bench.study import guidance, synthetic_attacks, tracked_laws
+from pursuit_bench.laws import guidance, synthetic_attacks, tracked_laws
 
 TRUE = {
     "none": synthetic_attacks.TrueLaw("none"),

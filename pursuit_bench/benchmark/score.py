@@ -1,5 +1,5 @@
 """``pursuit-bench score``: one agent, filling every slot of its role, played against each member
-of a shipped population of held-out opponents (:mod:`pursuit_bench.pretrained.populations`), on
+of a shipped population of held-out opponents (:mod:`pursuit_bench.benchmark.populations`), on
 the same episodes for every member, beside the reference agents on those same episodes; a
 normalized score per condition and an aggregate over conditions (docs/leaderboard.md).
 
@@ -33,9 +33,9 @@ from scipy import stats
 from pursuit_bench import pretrained
 from pursuit_bench.agents import external, sb3_model
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
+from pursuit_bench.benchmark import populations
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.task import obs_size
-from pursuit_bench.pretrained import populations
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey, PurePursuitPredator
 from pursuit_bench.training import runs
 from pursuit_bench.training.evaluate import PROTOCOL, play_variants

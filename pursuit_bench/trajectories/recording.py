@@ -248,7 +248,7 @@ def default_blueprint() -> rrb.Blueprint:
 
 class EpisodeSink(Protocol):
     """What hears an evaluation's episodes: a :class:`Recorder`, a trajectory file
-    (``training/trajectory_csv.py``) or several (:class:`Sinks`)."""
+    (``trajectories/trajectory_csv.py``) or several (:class:`Sinks`)."""
 
     def log_episode(self, episode: int, trace: EpisodeTrace) -> None: ...
 

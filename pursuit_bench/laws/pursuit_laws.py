@@ -1,5 +1,5 @@
 """Which pursuit law the predators follow: evaluation episodes played, every predator's attacks
-cut out, the laws of :mod:`pursuit_bench.study.guidance` fitted to each and one chosen by its
+cut out, the laws of :mod:`pursuit_bench.laws.guidance` fitted to each and one chosen by its
 criterion, summaries per predator kind and phase; what ``pursuit-bench law`` writes
 (``law.json``, ``law.png``).
 
@@ -26,12 +26,13 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.agents.kinds import ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.task import CHASE
 from pursuit_bench.env.world import DT
+from pursuit_bench.laws import guidance
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, PurePursuitPredator
-from pursuit_bench.study import guidance, statistics
 from pursuit_bench.training.evaluate import Actor, run_episodes
 
 #: Samples a segment must last after its onset (0.6 s: the trained predators' chases are short).
@@ -172,7 +173,7 @@ def censored_median(values: list[float], sides: list[str | None]) -> dict[str, A
 
 def _gain_summary(values: list[float], sides: list[str | None], seed: int) -> dict[str, Any]:
     """Over attacks: the median of the interior fits with its 95 % interval
-    (:func:`statistics.median_interval`; biased towards the middle of the range when fits sit
+    (:func:`stats.median_interval`; biased towards the middle of the range when fits sit
     at a bound), the fraction at each bound, and the median that counts the censored fits
     (:func:`censored_median`)."""
     interior = np.array([v for v, s in zip(values, sides, strict=True) if s is None])
@@ -180,7 +181,7 @@ def _gain_summary(values: list[float], sides: list[str | None], seed: int) -> di
     censored = censored_median(values, sides)
     summary: dict[str, Any] = {
         "median": float(np.median(interior)) if len(interior) else None,
-        "ci": statistics.median_interval(interior, seed),
+        "ci": stats.median_interval(interior, seed),
         "interior": len(interior),
         "lower": sum(s == "lower" for s in sides) / count,
         "upper": sum(s == "upper" for s in sides) / count,
@@ -327,7 +328,7 @@ def over_seeds(per_run: list[dict[str, Any]]) -> dict[str, Any]:
                 shares = np.array([c.count(law) / len(c) for c in usable])
                 phase_entry["share"][law] = {
                     "mean": float(shares.mean()) if len(shares) else None,
-                    "ci": statistics.t_interval(shares),
+                    "ci": stats.t_interval(shares),
                 }
             means = {law: v["mean"] or 0.0 for law, v in phase_entry["share"].items()}
             phase_entry["winner"] = max(means, key=lambda law: means[law]) if usable else None
@@ -353,7 +354,7 @@ def over_seeds(per_run: list[dict[str, Any]]) -> dict[str, Any]:
                             run_medians.append(censored_median([v for v, _ in fitted], [side for _, side in fitted]))
                     phase_entry["gains"][f"{law}.{gain}"] = {
                         "mean": float(np.mean(medians)) if medians else None,
-                        "ci": statistics.t_interval(np.array(medians)),
+                        "ci": stats.t_interval(np.array(medians)),
                         "runs": len(medians),
                         "censored": censored_median(every, every_side),
                         "censored_per_run": run_medians,

@@ -19,9 +19,10 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.study import pool, rule_study, statistics
-from pursuit_bench.study.report import p_text, span_text
+from pursuit_bench.reports import pool, rule_study
+from pursuit_bench.stats.text import p_text, span_text
 
 KINDS = rule_study.KINDS
 #: The rule study's one comparison.
@@ -96,15 +97,15 @@ def reliability(
                 "failed": count,
                 "runs": len(mine),
                 "share": count / len(mine),
-                "ci": statistics.wilson_interval(count, len(mine)),
+                "ci": stats.wilson_interval(count, len(mine)),
             }
         row["differences"] = [
-            {"pair": list(pair), **statistics.share_difference(*_counts(row[pair[0]]), *_counts(row[pair[1]]))}
+            {"pair": list(pair), **stats.share_difference(*_counts(row[pair[0]]), *_counts(row[pair[1]]))}
             for pair in pairs
         ]
         rows.append(row)
     tests = [d for r in rows for d in r["differences"]]
-    for test, adjusted in zip(tests, statistics.holm([d["p"] for d in tests]), strict=True):
+    for test, adjusted in zip(tests, stats.holm([d["p"] for d in tests]), strict=True):
         test["p_holm"] = float(adjusted)
     if pairs == PAIRS:  # the rule study's layout
         for row in rows:
@@ -116,7 +117,7 @@ def _counts(share: dict[str, Any]) -> tuple[int, int]:
     return share["failed"], share["runs"]
 
 
-def improvement(rows: list[dict[str, Any]], seed: int = 0, resamples: int = statistics.RESAMPLES) -> dict[str, Any]:
+def improvement(rows: list[dict[str, Any]], seed: int = 0, resamples: int = stats.RESAMPLES) -> dict[str, Any]:
     """P(first kind's run > second kind's run) per panel and averaged over panels, with 95 %
     percentile intervals from resampling runs within a condition, jointly for its panels (a run's
     values in the condition's panels stay together); for rows of several comparisons, one such
@@ -139,8 +140,8 @@ def improvement(rows: list[dict[str, Any]], seed: int = 0, resamples: int = stat
         rh = h[rng.integers(0, len(h), (resamples, len(h)))]  # (resamples, runs, panels)
         rf = f[rng.integers(0, len(f), (resamples, len(f)))]
         for j, i in enumerate(index):
-            per_panel[:, i] = statistics._pairs_above(rh[:, :, j], rf[:, :, j])
-    values = [statistics.probability_of_improvement([np.array(r[first])], [np.array(r[second])]) for r in rows]
+            per_panel[:, i] = stats.pairs_above(rh[:, :, j], rf[:, :, j])
+    values = [stats.probability_of_improvement([np.array(r[first])], [np.array(r[second])]) for r in rows]
 
     def interval(draws: np.ndarray) -> list[float]:
         return [float(q) for q in np.quantile(draws, [0.025, 0.975])]
@@ -211,7 +212,7 @@ def curves(runs: list[dict[str, Any]], keys: list[str], kinds: tuple[str, ...] =
             out.setdefault(condition, {})[kind] = {
                 "episodes": [int(b) for b in keys],
                 "mean": matrix.mean(axis=0).tolist(),
-                "ci": [statistics.t_interval(matrix[:, i]) for i in range(len(keys))],
+                "ci": [stats.t_interval(matrix[:, i]) for i in range(len(keys))],
             }
     return out
 
@@ -270,7 +271,7 @@ def study_of(where: Path, stem: str = "rule-study") -> Study:
     expected = "a seed rule if any" if stem == "rule-study" else "kinds and comparisons, and a seed rule if any"
     try:
         about = json.loads(marker.read_text())
-        kinds, pairs, differs = KINDS, PAIRS, statistics.EQUIVALENCE_MARGIN
+        kinds, pairs, differs = KINDS, PAIRS, stats.EQUIVALENCE_MARGIN
         if stem != "rule-study":
             kinds, pairs = tuple(about["kinds"]), [(a, b) for a, b in about["comparisons"]]
             differs = float(about.get("differs", differs))
@@ -305,10 +306,10 @@ def complete_settings(
 
 def summarise(
     runs: list[dict[str, Any]],
-    margin: float = statistics.EQUIVALENCE_MARGIN,
+    margin: float = stats.EQUIVALENCE_MARGIN,
     kinds: tuple[str, ...] = KINDS,
     pairs: list[tuple[str, str]] = PAIRS,
-    differs: float = statistics.EQUIVALENCE_MARGIN,
+    differs: float = stats.EQUIVALENCE_MARGIN,
     seed_rule: SeedRule | None = None,
 ) -> dict[str, Any]:
     """Everything the study's report says, at full precision: the primary verdicts (pool return at
@@ -393,7 +394,7 @@ def ladders(runs: list[dict[str, Any]], kinds: tuple[str, str] = ("residual", "h
 
             a = np.array([change(first[s]) for s in seeds])
             b = np.array([change(second[s]) for s in seeds])
-            d = statistics.paired_difference(a, b)
+            d = stats.paired_difference(a, b)
             p = min(1.0, 2 * min(d["p_greater"], d["p_less"]))
             cell = {
                 "setting": setting,
@@ -405,7 +406,7 @@ def ladders(runs: list[dict[str, Any]], kinds: tuple[str, str] = ("residual", "h
             out.setdefault(ladder, {"pair": list(kinds), "cells": []})["cells"].append(cell)
     for family in out.values():
         for cell, adjusted in zip(
-            family["cells"], statistics.holm([c["difference"]["p"] for c in family["cells"]]), strict=True
+            family["cells"], stats.holm([c["difference"]["p"] for c in family["cells"]]), strict=True
         ):
             cell["difference"]["p_holm"] = float(adjusted)
     return out
@@ -456,7 +457,7 @@ def corrections(runs: list[dict[str, Any]], final: str, differs: float) -> list[
                 "by_distance": {p: c["correction_by_distance"] for p, c in run["corrections"].items()},
             }
             row["differs"] = (
-                None if twin is None else abs(row["margin"] - row["hierarchical_margin"]) > differs + statistics.TIE
+                None if twin is None else abs(row["margin"] - row["hierarchical_margin"]) > differs + stats.TIE
             )
             rows.append(row)
     return rows
@@ -579,7 +580,7 @@ def _held(by: dict[str, int]) -> str:
     return held + f", of the {by['wanted']} a kind its seed rule (and floor, where it has one) asks for"
 
 
-def markdown(summary: dict[str, Any], differs: float = statistics.EQUIVALENCE_MARGIN) -> str:
+def markdown(summary: dict[str, Any], differs: float = stats.EQUIVALENCE_MARGIN) -> str:
     """The report: the primary verdicts first, then each secondary measure, labelled."""
     final = summary["budgets"][-1]
     s = summary["secondary"]
@@ -654,14 +655,14 @@ def write_report(
     stem: str = "rule-study",
     kinds: tuple[str, ...] = KINDS,
     pairs: list[tuple[str, str]] = PAIRS,
-    differs: float = statistics.EQUIVALENCE_MARGIN,
+    differs: float = stats.EQUIVALENCE_MARGIN,
     seed_rule: SeedRule | None = None,
 ) -> dict[str, Any]:
     """From the study's folder (``runs/*.json.gz``): ``<stem>-report.json``, ``<stem>.md`` and
     ``<stem>.png`` in ``out`` (rule-study-…, or a study of ``kinds`` compared by ``pairs``), and
     where the runs hold a residual kind's corrections ``<stem>-corrections.png``; returns the summary."""
+    from pursuit_bench.figures.plots import corrections_png, pool_png
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study.plots import corrections_png, pool_png
 
     runs = rule_study.read_runs(where / "runs")
     if not runs:

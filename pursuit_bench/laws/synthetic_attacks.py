@@ -1,4 +1,4 @@
-"""Attacks with a known answer, for validating :mod:`pursuit_bench.study.guidance`: a pursuer
+"""Attacks with a known answer, for validating :mod:`pursuit_bench.laws.guidance`: a pursuer
 following one law in continuous time (1 ms Euler steps, written apart from the fitting code's
 simulation), against a target weaving at random, sampled at 10 Hz with position noise.
 

@@ -25,7 +25,7 @@ import numpy as np
 from pursuit_bench.env.world import DT
 
 if TYPE_CHECKING:
-    from pursuit_bench.training.recording import EpisodeTrace
+    from pursuit_bench.trajectories.recording import EpisodeTrace
 
 COLUMNS = (
     "episode",

@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.study import statistics
-from pursuit_bench.study.report import p_text, span_text
+from pursuit_bench.stats.text import p_text, span_text
 
 FORMAT = "pursuit-bench-pool-1"
 KINDS = ("hierarchical", "flat")
@@ -42,7 +42,7 @@ KINDS = ("hierarchical", "flat")
 #: minus every later one (residual − hierarchical, residual − flat, hierarchical − flat).
 ORDER = ("residual", "hierarchical", "flat")
 FLEEING = "FleeingPrey"
-EQUIVALENCE_MARGIN = statistics.EQUIVALENCE_MARGIN
+EQUIVALENCE_MARGIN = stats.EQUIVALENCE_MARGIN
 VERDICTS = ("rule helps", "flat better", "equivalent", "not resolved")
 
 
@@ -129,8 +129,8 @@ def play(
     import torch
 
     from pursuit_bench.agents.kinds import ScriptedAgent
+    from pursuit_bench.analysis.robustness import check_opponents
     from pursuit_bench.rules.policies import FleeingPrey
-    from pursuit_bench.study.robustness import check_opponents
     from pursuit_bench.training import runs
     from pursuit_bench.training.evaluate import evaluate_agents
 
@@ -178,7 +178,7 @@ def run(
     """Every judged run against its pool at every budget, and in cross-kind play; each evaluation
     kept in ``out/pool-parts/`` as it finishes (a rerun goes on from there). Returns the compact
     result (:func:`summarise` reads it)."""
-    from pursuit_bench.study.jobs import run_jobs
+    from pursuit_bench.training.jobs import run_jobs
 
     layout = plan(sources, pool_seeds)
     jobs = _jobs(layout, budgets, episodes, cross_episodes, seed)
@@ -280,16 +280,14 @@ def pair_of(row: dict[str, Any]) -> tuple[str, str]:
 def verdict(
     difference: dict[str, Any],
     equivalent: dict[str, Any],
-    alpha: float = statistics.ALPHA,
+    alpha: float = stats.ALPHA,
     pair: tuple[str, str] = KINDS,
 ) -> str:
-    """A panel's verdict from ``pair[0]`` minus ``pair[1]`` (:func:`statistics.welch_difference`
-    with a Holm-adjusted two-sided ``p_holm``) and its equivalence test (:func:`statistics.equivalence`
+    """A panel's verdict from ``pair[0]`` minus ``pair[1]`` (:func:`stats.welch_difference`
+    with a Holm-adjusted two-sided ``p_holm``) and its equivalence test (:func:`stats.equivalence`
     with ``p_holm``): a significant difference first (two-sided at ``2 alpha``, ``alpha`` a
     direction; :func:`words`), then equivalence within the margin, else not resolved."""
-    return statistics.difference_verdict(
-        difference["mean"], difference["p_holm"], equivalent["p_holm"], words(pair), alpha
-    )
+    return stats.difference_verdict(difference["mean"], difference["p_holm"], equivalent["p_holm"], words(pair), alpha)
 
 
 def pairwise(rows: list[dict[str, Any]], pairs: list[tuple[str, str]]) -> list[dict[str, Any]]:
@@ -306,7 +304,7 @@ def pairwise(rows: list[dict[str, Any]], pairs: list[tuple[str, str]]) -> list[d
 
 
 def compare(
-    rows: list[dict[str, Any]], margin: float = EQUIVALENCE_MARGIN, alpha: float = statistics.ALPHA
+    rows: list[dict[str, Any]], margin: float = EQUIVALENCE_MARGIN, alpha: float = stats.ALPHA
 ) -> dict[str, int]:
     """Fill each row (a comparison: :func:`pair_of`, and each of its two kinds' per-run values)
     with the first kind minus the second (Welch), the equivalence test, both Holm-adjusted over the
@@ -315,10 +313,10 @@ def compare(
         first, second = pair_of(row)
         a, b = np.asarray(row[first]), np.asarray(row[second])
         row["means"] = {first: float(a.mean()), second: float(b.mean())}
-        row["difference"] = statistics.welch_difference(a, b)
-        row["equivalence"] = statistics.equivalence(a, b, margin, alpha)
+        row["difference"] = stats.welch_difference(a, b)
+        row["equivalence"] = stats.equivalence(a, b, margin, alpha)
     for key in ("difference", "equivalence"):
-        for row, adjusted in zip(rows, statistics.holm([r[key]["p"] for r in rows]), strict=True):
+        for row, adjusted in zip(rows, stats.holm([r[key]["p"] for r in rows]), strict=True):
             row[key]["p_holm"] = float(adjusted)
     for row in rows:
         row["verdict"] = verdict(row["difference"], row["equivalence"], alpha, pair_of(row))
@@ -361,7 +359,7 @@ def summarise(result: dict[str, Any], margin: float = EQUIVALENCE_MARGIN) -> dic
         by_pair = [
             {
                 "pair": list(pair),
-                **statistics.improvement_interval(
+                **stats.improvement_interval(
                     [np.array(r[pair[0]]) for r in last[key]["panels"] if pair_of(r) == pair],
                     [np.array(r[pair[1]]) for r in last[key]["panels"] if pair_of(r) == pair],
                 ),
@@ -457,21 +455,21 @@ def cross_kind(result: dict[str, Any]) -> list[dict[str, Any]]:
         pool = np.array(
             [np.mean([pooled(r["pool"][final], p)["margin"] for p in r["cross"]["own"]["panels"]]) for r in runs]
         )
-        change = statistics.paired_difference(other, own)
+        change = stats.paired_difference(other, own)
         rows.append(
             {
                 "condition": condition,
                 "kind": kind,
                 **({} if len(kinds) == 2 else {"other_kind": other_kind}),
                 "runs": len(runs),
-                "own_prey": {"mean": float(own.mean()), "ci": statistics.t_interval(own)},
-                "other_kind_prey": {"mean": float(other.mean()), "ci": statistics.t_interval(other)},
-                "pool": {"mean": float(pool.mean()), "ci": statistics.t_interval(pool)},
+                "own_prey": {"mean": float(own.mean()), "ci": stats.t_interval(own)},
+                "other_kind_prey": {"mean": float(other.mean()), "ci": stats.t_interval(other)},
+                "pool": {"mean": float(pool.mean()), "ci": stats.t_interval(pool)},
                 "change": {k: change[k] for k in ("mean", "ci", "p_greater", "p_less")},
             }
         )
     two_sided = [min(1.0, 2 * min(r["change"]["p_greater"], r["change"]["p_less"])) for r in rows]
-    for row, adjusted in zip(rows, statistics.holm(two_sided) if rows else [], strict=True):
+    for row, adjusted in zip(rows, stats.holm(two_sided) if rows else [], strict=True):
         row["change"]["p_holm"] = float(adjusted)  # the table is one family
     return rows
 
@@ -496,7 +494,7 @@ def curves(result: dict[str, Any]) -> dict[str, dict[str, Any]]:
             out.setdefault(condition, {})[kind] = {
                 "episodes": [int(b) for b in budgets],
                 "mean": matrix.mean(axis=0).tolist(),
-                "ci": [statistics.t_interval(matrix[:, i]) for i in range(len(budgets))],
+                "ci": [stats.t_interval(matrix[:, i]) for i in range(len(budgets))],
             }
     return out
 
@@ -629,8 +627,8 @@ def markdown(summary: dict[str, Any]) -> str:
 def write_report(result: dict[str, Any], out: Path) -> dict[str, Any]:
     """From a compact pool result: pool-report.json (every figure at full precision), pool.md and
     pool.png in ``out``; returns the summary."""
+    from pursuit_bench.figures.plots import pool_png
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study.plots import pool_png
 
     summary = summarise(result)
     out.mkdir(parents=True, exist_ok=True)

@@ -5,7 +5,7 @@ over a sweep's seeds (each seed's predators against every seed's prey).
 The quantity throughout is a run's **margin**: per predator, its return as trained minus the
 better of always-chase and always-stalk put in its place (same perturbed episodes, same prey),
 averaged over the condition's predators. Over seeds it gets a t-interval
-(:mod:`pursuit_bench.study.statistics`); its change under a perturbation is paired by seed.
+(:mod:`pursuit_bench.stats`); its change under a perturbation is paired by seed.
 Runs are the unit of every test (:func:`families`): a change is tested within its kind (paired
 t), hierarchical against flat by Welch's test on the two kinds' changes (other runs, other prey),
 each table's comparisons as one family corrected by Holm, and "holds" only where two one-sided
@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.perturbations import Perturbations
-from pursuit_bench.study import statistics
-from pursuit_bench.study.report import p_text, span_text
+from pursuit_bench.stats.text import p_text, span_text
 
 #: The strengths tried per perturbation, weakest first; the strongest of each costs
 #: always-chase a clear part of its return (docs/robustness.md measures how much).
@@ -177,7 +177,7 @@ def run(
     a run folder or a shipped condition) on every rung of :data:`LADDERS` and, between sources of
     one condition and kind, in cross-play; each evaluation is kept in ``out/robust-parts/`` as it
     finishes (a rerun goes on from there). Returns :func:`summarise`'s result."""
-    from pursuit_bench.study.jobs import run_jobs
+    from pursuit_bench.training.jobs import run_jobs
 
     jobs = _jobs(sources, episodes, seed, crossplay=True)
     stamp = {"episodes": episodes, "seed": seed}
@@ -207,7 +207,7 @@ def summarise(
         entry: dict[str, Any] = {
             NONE: {
                 "margin": plain.mean().item(),
-                "ci": statistics.t_interval(plain),
+                "ci": stats.t_interval(plain),
                 "values": plain.tolist(),
                 "always_chase": float(np.mean([by_run[s["name"]][NONE]["always_chase"] for s in members])),
             }
@@ -219,13 +219,13 @@ def summarise(
                 if not all(level in by_run[s["name"]] for s in members):
                     continue
                 margin = np.array([by_run[s["name"]][level]["margin"] for s in members])
-                change = statistics.paired_difference(margin, plain)
+                change = stats.paired_difference(margin, plain)
                 chase = np.array([by_run[s["name"]][level]["always_chase"] for s in members])
                 rungs.append(
                     {
                         "value": value,
                         "margin": margin.mean().item(),
-                        "ci": statistics.t_interval(margin),
+                        "ci": stats.t_interval(margin),
                         "values": margin.tolist(),
                         "change": {k: change[k] for k in ("mean", "ci", "p_greater", "p_less")},
                         "always_chase": chase.mean().item(),
@@ -241,12 +241,12 @@ def summarise(
                 [[by_run[s["name"]][NONE if o is s else f"vs|{o['name']}"]["margin"] for o in members] for s in members]
             )
             held_out = np.array([np.delete(row, i).mean() for i, row in enumerate(matrix)])
-            gap = statistics.paired_difference(np.diag(matrix), held_out)
+            gap = stats.paired_difference(np.diag(matrix), held_out)
             crossplay.setdefault(condition, {})[kind] = {
                 "seeds": [s["seed"] for s in members],
                 "matrix": matrix.tolist(),
                 "self_play": float(np.diag(matrix).mean()),
-                "held_out": {"mean": held_out.mean().item(), "ci": statistics.t_interval(held_out)},
+                "held_out": {"mean": held_out.mean().item(), "ci": stats.t_interval(held_out)},
                 "gap": {k: gap[k] for k in ("mean", "ci", "p_greater", "p_less", "differences")},
             }
     return {
@@ -267,8 +267,8 @@ def summarise(
 KINDS = ("hierarchical", "flat")
 #: What the text may call a change (or margin) that is not there: within this much of zero in
 #: return per episode, shown by two one-sided tests. The project's margin
-#: (:data:`statistics.EQUIVALENCE_MARGIN`: five captures in a hundred episodes, the pool study's).
-EQUIVALENCE_MARGIN = statistics.EQUIVALENCE_MARGIN
+#: (:data:`stats.EQUIVALENCE_MARGIN`: five captures in a hundred episodes, the pool study's).
+EQUIVALENCE_MARGIN = stats.EQUIVALENCE_MARGIN
 #: The families, in the order docs/robustness.md gives them: what each compares, and the words of
 #: its verdicts for a difference below and above zero. Each family is corrected alone (Holm), its
 #: differences and its equivalence tests separately, as the pool study's tables are.
@@ -312,7 +312,7 @@ def _one_sample(values: np.ndarray, margin: float | None) -> dict[str, Any]:
     """The mean of per-run ``values`` (a margin, or a change paired within each run) against zero:
     its 95 % t-interval, the two-sided p of the t-test and, given ``margin``, the two one-sided
     tests of equivalence within it."""
-    test = statistics.paired_difference(values, np.zeros_like(values))
+    test = stats.paired_difference(values, np.zeros_like(values))
     out: dict[str, Any] = {
         "n": test["n"],
         "mean": test["mean"],
@@ -320,37 +320,37 @@ def _one_sample(values: np.ndarray, margin: float | None) -> dict[str, Any]:
         "p": min(1.0, 2 * min(test["p_greater"], test["p_less"])),
     }
     if margin is not None:
-        out["equivalence"] = statistics.paired_equivalence(values, margin)
+        out["equivalence"] = stats.paired_equivalence(values, margin)
     return out
 
 
 def _two_sample(ours: np.ndarray, theirs: np.ndarray, margin: float) -> dict[str, Any]:
     """``mean(ours) - mean(theirs)`` for two kinds' runs (independent: other runs, other prey):
     Welch's interval and two-sided p, and the two one-sided Welch tests of equivalence."""
-    welch = statistics.welch_difference(ours, theirs)
+    welch = stats.welch_difference(ours, theirs)
     return {
         "n": [len(ours), len(theirs)],
         "mean": welch["mean"],
         "ci": welch["ci"],
         "p": welch["p"],
-        "equivalence": statistics.equivalence(ours, theirs, margin),
+        "equivalence": stats.equivalence(ours, theirs, margin),
     }
 
 
-def correct(rows: list[dict[str, Any]], words: tuple[str, str], alpha: float = statistics.ALPHA) -> dict[str, int]:
+def correct(rows: list[dict[str, Any]], words: tuple[str, str], alpha: float = stats.ALPHA) -> dict[str, int]:
     """Holm over ``rows`` (one family): each row's two-sided ``p`` and, where it has one, its
     equivalence test's ``p``, adjusted apart (``p_holm``); then its verdict: ``words[0]`` or
     ``words[1]`` (below or above zero) when the adjusted two-sided p is at most ``2 alpha``, else
     ``equivalent`` when the adjusted equivalence p is at most ``alpha``, else ``not resolved``.
     Returns the verdict counts, with the number of rows whose unadjusted p is below ``2 alpha``."""
-    for row, adjusted in zip(rows, statistics.holm([r["p"] for r in rows]), strict=True):
+    for row, adjusted in zip(rows, stats.holm([r["p"] for r in rows]), strict=True):
         row["p_holm"] = float(adjusted)
     tested = [r for r in rows if "equivalence" in r]
-    for row, adjusted in zip(tested, statistics.holm([r["equivalence"]["p"] for r in tested]), strict=True):
+    for row, adjusted in zip(tested, stats.holm([r["equivalence"]["p"] for r in tested]), strict=True):
         row["equivalence"]["p_holm"] = float(adjusted)
     for row in rows:
         equivalent = row["equivalence"]["p_holm"] if "equivalence" in row else None
-        row["verdict"] = statistics.difference_verdict(row["mean"], row["p_holm"], equivalent, words, alpha)
+        row["verdict"] = stats.difference_verdict(row["mean"], row["p_holm"], equivalent, words, alpha)
     counts = {v: sum(r["verdict"] == v for r in rows) for v in (*words, "equivalent", "not resolved")}
     return {"comparisons": len(rows), "uncorrected": sum(r["p"] < 2 * alpha for r in rows), **counts}
 
@@ -490,8 +490,8 @@ def families_markdown(result: dict[str, Any]) -> str:
     fams = result["families"]
     lines = [
         "The families of comparisons. Each is corrected by Holm on its own: its differences from zero "
-        f"(two-sided, significant at an adjusted p of {2 * statistics.ALPHA:g}) and, apart, its equivalence tests "
-        f"(two one-sided tests within ±{EQUIVALENCE_MARGIN:g}, at {statistics.ALPHA:g} a side):",
+        f"(two-sided, significant at an adjusted p of {2 * stats.ALPHA:g}) and, apart, its equivalence tests "
+        f"(two one-sided tests within ±{EQUIVALENCE_MARGIN:g}, at {stats.ALPHA:g} a side):",
         "",
         "| family | compares | comparisons | unadjusted p < 0.05 | different after Holm | equivalent after Holm "
         "| not resolved |",

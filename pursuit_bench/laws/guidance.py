@@ -46,7 +46,7 @@ docs/pursuit-law.md). The fit's quality is its error relative to ``"none"``.
 Gains are bounded (:data:`GAIN_BOUNDS`) and delays run over 0 … ``max_delay`` samples; a fit
 whose optimum lies at a bound is *censored* there (:attr:`LawFit.censored`): reported as
 ``">15"``, never averaged with interior fits (a median that counts them:
-:func:`pursuit_bench.study.pursuit_laws.censored_median`).
+:func:`pursuit_bench.laws.pursuit_laws.censored_median`).
 """
 
 from __future__ import annotations

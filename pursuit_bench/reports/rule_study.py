@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.study import statistics
 
 FORMAT = "pursuit-bench-rule-study-1"
 POPULATION = "rule-study"
@@ -257,9 +257,9 @@ def pooled(evaluations: dict[str, Any], predator: str, leave_out: str | None = N
 
 def failed(run: dict[str, Any], predator: str, margin: float = FAILURE_MARGIN) -> bool:
     """Whether a judged run fails in a panel: its pool margin at the last budget below ``margin``
-    (by more than :data:`~pursuit_bench.study.statistics.TIE`: a margin equal to the line in exact
+    (by more than :data:`~pursuit_bench.stats.TIE`: a margin equal to the line in exact
     arithmetic does not fail by a rounding)."""
-    return pooled(run["pool"][last_budget(run)], predator)["margin"] < margin - statistics.TIE
+    return pooled(run["pool"][last_budget(run)], predator)["margin"] < margin - stats.TIE
 
 
 def last_budget(run: dict[str, Any]) -> str:

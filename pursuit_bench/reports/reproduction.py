@@ -9,7 +9,7 @@ by seed; Holm's correction over the family of comparisons gives every panel a ve
 not resolved, worse); the paper's strict count is made seed by seed; the probability of
 improvement aggregates over panels; unresolved comparisons get a power figure; the margins'
 slope over the last 30 % of training says whether they still move. Every statistic comes from
-:mod:`pursuit_bench.study.statistics` (docs/statistics.md); this module arranges the data and writes
+:mod:`pursuit_bench.stats` (docs/stats.md); this module arranges the data and writes
 the tables and figures.
 """
 
@@ -26,8 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.study import statistics
+from pursuit_bench.stats.text import p_text, span_text
 
 BASELINES = ("always_chase", "always_stalk")
 
@@ -163,7 +164,7 @@ def panel_table(results: list[RunResult]) -> list[dict[str, Any]]:
     runs they come from), mean and t-interval over seeds; the variant with the highest mean
     (``"tie"`` when two share it: a tie is no win); and, where the hierarchical predator and
     the baselines played the same episodes, its paired difference with each baseline
-    (:func:`statistics.paired_difference`, seed by seed)."""
+    (:func:`stats.paired_difference`, seed by seed)."""
     kinds = sorted({r.kind for r in results}, key=lambda k: (k != "hierarchical", k))
     reference = kinds[0]  # whose evaluations hold the baselines
     table = []
@@ -179,7 +180,7 @@ def panel_table(results: list[RunResult]) -> list[dict[str, Any]]:
                     values = np.array([r.evaluation["panels"][p][key] for r in runs])
                     variants[label] = {
                         "mean": float(values.mean()),
-                        "ci": statistics.t_interval(values),
+                        "ci": stats.t_interval(values),
                         "seeds": [r.seed for r in runs],
                         "values": values.tolist(),
                         "runs": [r.name for r in runs],
@@ -188,48 +189,46 @@ def panel_table(results: list[RunResult]) -> list[dict[str, Any]]:
             variants = {k: variants[k] for k in order}  # trained kinds first, then the baselines
             entry: dict[str, Any] = {"condition": condition, "predator": predator, "variants": variants}
             top = max(v["mean"] for v in variants.values())
-            leaders = [k for k, v in variants.items() if top - v["mean"] <= statistics.TIE]
+            leaders = [k for k, v in variants.items() if top - v["mean"] <= stats.TIE]
             entry["best"] = leaders[0] if len(leaders) == 1 else "tie"
             if reference == "hierarchical" and all(b in variants for b in BASELINES):
                 ours = np.array(variants["hierarchical"]["values"])
-                entry["paired"] = {
-                    b: statistics.paired_difference(ours, np.array(variants[b]["values"])) for b in BASELINES
-                }
+                entry["paired"] = {b: stats.paired_difference(ours, np.array(variants[b]["values"])) for b in BASELINES}
             table.append(entry)
     return table
 
 
 def judge(
-    table: list[dict[str, Any]], alpha: float = statistics.ALPHA, margin: float = statistics.EQUIVALENCE_MARGIN
+    table: list[dict[str, Any]], alpha: float = stats.ALPHA, margin: float = stats.EQUIVALENCE_MARGIN
 ) -> dict[str, int]:
     """Holm's correction over the family of paired comparisons in ``table`` (every panel
     against both baselines), each direction its own family at ``alpha``, and the equivalence
-    tests within ``margin`` (two one-sided paired tests, :func:`statistics.paired_equivalence`) a
+    tests within ``margin`` (two one-sided paired tests, :func:`stats.paired_equivalence`) a
     third family; writes the adjusted p-values into each comparison and the panel's ``verdict``
-    (:func:`statistics.classify`: better, equivalent, not resolved or worse). Returns the count
+    (:func:`stats.classify`: better, equivalent, not resolved or worse). Returns the count
     of each verdict."""
     comparisons = [c for t in table for c in t.get("paired", {}).values()]
     if comparisons:
         for c in comparisons:
-            c["equivalence"] = statistics.paired_equivalence(c["differences"], margin)
+            c["equivalence"] = stats.paired_equivalence(c["differences"], margin)
             c["p_equivalent"] = c["equivalence"]["p"]
         for side in ("p_greater", "p_less", "p_equivalent"):
-            adjusted = statistics.holm([c[side] for c in comparisons])
+            adjusted = stats.holm([c[side] for c in comparisons])
             for c, value in zip(comparisons, adjusted, strict=True):
                 c[f"{side}_holm"] = float(value)
     counts = dict.fromkeys(VERDICTS, 0)
     for t in table:
         if "paired" in t:
-            t["verdict"] = statistics.classify(t["paired"], alpha)
+            t["verdict"] = stats.classify(t["paired"], alpha)
             counts[t["verdict"]] += 1
     return counts
 
 
-VERDICTS = statistics.VERDICTS
+VERDICTS = stats.VERDICTS
 
 
 #: Equivalence margins the sensitivity table re-judges a budget at, beside the chosen one.
-SENSITIVITY_MARGINS = (0.02, statistics.EQUIVALENCE_MARGIN, 0.1)
+SENSITIVITY_MARGINS = (0.02, stats.EQUIVALENCE_MARGIN, 0.1)
 
 
 def margin_sensitivity(table: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -282,7 +281,7 @@ def strict_counts(table: list[dict[str, Any]]) -> dict[str, Any]:
             v = t["variants"]
             i = v["hierarchical"]["seeds"].index(seed)
             ours = v["hierarchical"]["values"][i]
-            wins += all(ours > v[b]["values"][i] + statistics.TIE for b in BASELINES)
+            wins += all(ours > v[b]["values"][i] + stats.TIE for b in BASELINES)
         counts.append(wins)
     values = np.array(counts, dtype=float)
     return {
@@ -291,7 +290,7 @@ def strict_counts(table: list[dict[str, Any]]) -> dict[str, Any]:
         "panels": len(judged),
         "mean": float(values.mean()),
         "sd": float(values.std(ddof=1)) if len(values) > 1 else None,
-        "ci": statistics.t_interval(values),
+        "ci": stats.t_interval(values),
         "min": int(values.min()),
         "max": int(values.max()),
         "seeds_at_or_above_paper": int(np.sum(values >= PAPER_COUNT)),
@@ -326,7 +325,7 @@ def improvement(results: list[RunResult], table: list[dict[str, Any]]) -> dict[s
     """The probability of improvement of the hierarchical predator over each baseline (its own
     prey's seed: the same opponents), aggregated over panels as rliable does (Mann–Whitney per
     panel, averaged), with a stratified bootstrap interval (seeds resampled within each panel).
-    Not over the flat ablation: its runs meet other prey (:mod:`pursuit_bench.study.pool` compares
+    Not over the flat ablation: its runs meet other prey (:mod:`pursuit_bench.reports.pool` compares
     the two kinds against the same opponents)."""
     out: dict[str, dict[str, Any]] = {}
     judged = [t for t in table if "hierarchical" in t["variants"]]
@@ -336,7 +335,7 @@ def improvement(results: list[RunResult], table: list[dict[str, Any]]) -> dict[s
             continue
         xs = [np.array(t["variants"]["hierarchical"]["values"]) for t in panels]
         ys = [np.array(t["variants"][other]["values"]) for t in panels]
-        out[other] = statistics.improvement_interval(xs, ys)
+        out[other] = stats.improvement_interval(xs, ys)
     return out
 
 
@@ -355,7 +354,7 @@ def power_table(table: list[dict[str, Any]]) -> list[dict[str, Any]]:
         if t.get("verdict") != "not resolved":
             continue
         for baseline, c in t["paired"].items():
-            if min(c["p_greater_holm"], c["p_less_holm"]) <= statistics.ALPHA:
+            if min(c["p_greater_holm"], c["p_less_holm"]) <= stats.ALPHA:
                 continue  # this comparison is decided; the other one holds the panel back
             row: dict[str, Any] = {
                 "condition": t["condition"],
@@ -366,10 +365,8 @@ def power_table(table: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 "seeds": c["n"],
             }
             for margin in POWER_MARGINS:
-                row[f"seeds_for_{margin}"] = statistics.seeds_for_power(c["sd"], margin)
-                row[f"seeds_for_{margin}_family"] = statistics.seeds_for_power(
-                    c["sd"], margin, statistics.ALPHA / family
-                )
+                row[f"seeds_for_{margin}"] = stats.seeds_for_power(c["sd"], margin)
+                row[f"seeds_for_{margin}_family"] = stats.seeds_for_power(c["sd"], margin, stats.ALPHA / family)
             rows.append(row)
     return rows
 
@@ -453,7 +450,7 @@ def margin_by_budget(results: list[RunResult]) -> list[dict[str, Any]]:
             row["budgets"][str(episodes)] = {
                 "seeds": len(margins),
                 "mean": float(margins.mean()),
-                "ci": statistics.t_interval(margins),
+                "ci": stats.t_interval(margins),
                 "values": margins.tolist(),
             }
     return list(rows.values())
@@ -486,7 +483,7 @@ def convergence(results: list[RunResult]) -> list[dict[str, Any]]:
     return minus the higher of the baselines' on that seed's evaluation) still moves over the
     last 30 % of training: the evaluations kept there (``--keep-checkpoints``) and the final
     one (at least the last three budgets), a least-squares slope per seed, the slopes' t-interval over seeds
-    (:func:`statistics.slope_test`, episodes in thousands): ``rising``, ``falling``, ``flat``
+    (:func:`stats.slope_test`, episodes in thousands): ``rising``, ``falling``, ``flat``
     (the interval within ±0.02 over that stretch) or ``not resolved``, with the slope the test
     would have detected."""
     rows: list[dict[str, Any]] = []
@@ -503,7 +500,7 @@ def convergence(results: list[RunResult]) -> list[dict[str, Any]]:
         if "paired" not in t:
             continue
         curves = np.array([seed_margins(tables[e][i]) for e in window]).T  # (seeds, budgets)
-        test = statistics.slope_test(list(curves), np.array(window) / 1000, STEADY_CHANGE / span)
+        test = stats.slope_test(list(curves), np.array(window) / 1000, STEADY_CHANGE / span)
         rows.append(
             {
                 "condition": t["condition"],
@@ -533,7 +530,7 @@ def curves(results: list[RunResult]) -> dict[str, dict[str, Any]]:
                 per_run = np.array([r.curve[column] for r in runs])  # type: ignore[index]  # (seeds, blocks)
                 entry: dict[str, Any] = {"mean": per_run.mean(axis=0).tolist(), "ci": None}
                 if len(runs) > 1:
-                    bounds = np.array([statistics.t_interval(block) for block in per_run.T])  # (blocks, 2)
+                    bounds = np.array([stats.t_interval(block) for block in per_run.T])  # (blocks, 2)
                     entry["ci"] = [bounds[:, 0].tolist(), bounds[:, 1].tolist()]
                 series[label] = entry
             ends = np.array(runs[0].curve["episodes"])  # type: ignore[index]
@@ -544,18 +541,6 @@ def curves(results: list[RunResult]) -> dict[str, dict[str, Any]]:
                 "series": series,
             }
     return out
-
-
-def span_text(ci: list[float] | None, digits: int = 3) -> str:
-    """An interval as the tables print it: ` [low, high]` signed, or nothing without one."""
-    return f" [{ci[0]:+.{digits}f}, {ci[1]:+.{digits}f}]" if ci else ""
-
-
-def p_text(value: float | None) -> str:
-    """A p-value as the tables print it: three decimals, or one significant digit below 0.001."""
-    if value is None:
-        return "–"
-    return f"{value:.3f}" if value >= 0.001 else f"{value:.0e}"
 
 
 def classification_markdown(table: list[dict[str, Any]]) -> str:
@@ -760,8 +745,8 @@ def flat_table(results: list[RunResult]) -> list[dict[str, Any]]:
         for name, measure in measures.items():
             values = {k: np.array([measure(r.evaluation) for r in v]) for k, v in kinds.items()}
             row[name] = {
-                **{k: {"mean": float(v.mean()), "ci": statistics.t_interval(v)} for k, v in values.items()},
-                "difference": statistics.welch_difference(values["hierarchical"], values["flat"]),
+                **{k: {"mean": float(v.mean()), "ci": stats.t_interval(v)} for k, v in values.items()},
+                "difference": stats.welch_difference(values["hierarchical"], values["flat"]),
             }
         rows.append(row)
     return rows
@@ -848,8 +833,8 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
     ``margins.png``
     into ``out`` (default: ``where``). Returns the summary and the files written; ValueError
     if there is no evaluated run."""
+    from pursuit_bench.figures.plots import budget_png, counts_png, curves_png, fig2_png, forest_png, margins_png
     from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-    from pursuit_bench.study.plots import budget_png, counts_png, curves_png, fig2_png, forest_png, margins_png
 
     out = out or where
     results = collect(where)
@@ -863,8 +848,8 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
         "per_seed": counts,
         "close_calls": close_calls(results, table),
         "improvement": improvement(results, table),
-        "alpha_per_direction": statistics.ALPHA,
-        "equivalence_margin": statistics.EQUIVALENCE_MARGIN,
+        "alpha_per_direction": stats.ALPHA,
+        "equivalence_margin": stats.EQUIVALENCE_MARGIN,
         "comparisons": sum(len(t.get("paired", {})) for t in table),
         "by_condition": verdicts_by_condition(table),
         "margin_sensitivity": margin_sensitivity(table),
@@ -898,9 +883,9 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             "",
             f"Seeds are the unit: each panel's difference from each baseline is paired by seed (same prey, same "
             f"evaluation episodes), with a 95 % t-interval over seeds and a one-sided paired t-test per direction, "
-            f"Holm-corrected over the {totals['comparisons']} comparisons at {statistics.ALPHA} a direction, and "
-            f"two one-sided paired tests for equivalence within ±{statistics.EQUIVALENCE_MARGIN} (Holm alike) "
-            "(docs/statistics.md).",
+            f"Holm-corrected over the {totals['comparisons']} comparisons at {stats.ALPHA} a direction, and "
+            f"two one-sided paired tests for equivalence within ±{stats.EQUIVALENCE_MARGIN} (Holm alike) "
+            "(docs/stats.md).",
             "",
             f"- **{totals['better']} better, {totals['equivalent']} equivalent, {totals['not resolved']} not "
             f"resolved, {totals['worse']} worse** of {totals['panels']} panels.",

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from pursuit_bench.env.world import DT
-from pursuit_bench.study import pursuit_laws
+from pursuit_bench.laws import pursuit_laws
 
 #: The longest piece of a stretch fitted as one attack, in samples after its onset (4 s).
 PIECE = 40

@@ -44,7 +44,7 @@ from pursuit_bench.io.files import atomic_write_text
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey, PurePursuitPredator
 from pursuit_bench.training.train import TrainConfig, build_agents
 
-FOLDER = Path(__file__).parent / "populations"
+FOLDER = Path(__file__).parents[1] / "pretrained" / "populations"
 """Where the shipped populations lie (package data)."""
 INDEX = "population.json"
 ROLES = ("predator", "prey")
@@ -313,6 +313,6 @@ def build_provisional(dest: Path | None = None) -> list[Path]:
     return written
 
 
-if __name__ == "__main__":  # python -m pursuit_bench.pretrained.populations: rebuild the provisional ones
+if __name__ == "__main__":  # python -m pursuit_bench.benchmark.populations: rebuild the provisional ones
     for path in build_provisional():
         print(path)

@@ -1,18 +1,6 @@
-"""Seed-level statistics: every interval, test and count the reports print comes from here.
-
-Seeds are the unit of replication. A trained predator and the baselines put in its place play
-the same evaluation episodes against the same prey of the same seed, so they are compared
-*paired by seed*: the seed-level difference of mean returns, its mean over seeds and a
-Student-t interval, a one-sided paired t-test per direction, and Holm's step-down correction
-over the family of comparisons a report counts. Intervals are t-intervals, not percentile
-bootstraps: at 3–10 seeds the percentile bootstrap under-covers (docs/statistics.md measures
-both). A bootstrap is kept where it is the right tool, for aggregates over panels: the
-probability of improvement (Agarwal et al. 2021, as rliable defines it: the Mann–Whitney
-statistic per panel, averaged over panels) with a stratified bootstrap over seeds (seeds
-resampled within each panel). rliable itself is not a dependency: it brings ``arch``, ``pandas``
-and ``seaborn`` for a statistic of a few lines (checked against ``scipy.stats.mannwhitneyu``
-in the tests).
-"""
+"""Comparisons of two kinds over seeds: the paired and Welch differences with their tests, TOST
+equivalence, the four verdicts, power (seeds needed, the smallest detectable effect), a trend's
+slope test and the exact test of two shares."""
 
 from __future__ import annotations
 
@@ -22,55 +10,19 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-CONFIDENCE = 0.95
+from pursuit_bench.stats.intervals import CONFIDENCE, TIE, t_interval
+
 #: Family-wise error per direction: a one-sided test at 0.025 matches a two-sided 95 %
 #: interval, so a comparison is called better (or worse) exactly when its interval, widened
 #: for the family by Holm's procedure, excludes zero on that side.
 ALPHA = 0.025
 
-#: Two measures closer than this are equal. A run's measures are means of episode returns summed
-#: in different orders, so values equal in exact arithmetic can differ in their last bits (a pool
-#: margin of exactly 0 came out as -2.8e-17): a comparison with a line or another run must not
-#: read that as a difference.
-TIE = 1e-12
 
-RESAMPLES = 2000
 #: The equivalence margin of every four-verdict table, in return per episode (a capture is worth
 #: 1): five captures in a hundred episodes, the larger of the reproduction's power margins
 #: (REPRODUCTION.md). A choice, fixed (for the pool study) before it was applied to the
 #: reproduction's panels and the robustness study; the report re-judges at ±0.02 and ±0.1 beside it.
 EQUIVALENCE_MARGIN = 0.05
-
-
-def t_interval(values: Sequence[float] | np.ndarray, confidence: float = CONFIDENCE) -> list[float] | None:
-    """The Student-t interval of the mean of ``values`` (seeds); None below two values."""
-    x = np.asarray(values, dtype=float)
-    if x.ndim != 1:
-        raise ValueError(f"t_interval needs one value per seed (a 1-d array), got shape {x.shape}")
-    if len(x) < 2:
-        return None
-    half = float(stats.t.ppf(0.5 + confidence / 2, len(x) - 1) * x.std(ddof=1) / np.sqrt(len(x)))
-    return [float(x.mean()) - half, float(x.mean()) + half]
-
-
-#: Fewest values a median's interval is given for: below it the percentile bootstrap covers far
-#: less than it claims (lognormal data: 74 % at 3 values, 93–94 % at 5–20; ``scripts/interval_coverage.py``).
-MEDIAN_MIN = 5
-
-
-def median_interval(
-    values: Sequence[float] | np.ndarray, seed: int, confidence: float = CONFIDENCE, minimum: int = MEDIAN_MIN
-) -> list[float] | None:
-    """The percentile-bootstrap interval of the median of ``values`` (scipy's ``bootstrap``,
-    2000 resamples drawn from ``seed``); None below ``minimum`` values or when all are equal."""
-    x = np.asarray(values, dtype=float)
-    if len(x) < minimum or np.ptp(x) == 0:
-        return None
-    interval = stats.bootstrap(
-        (x,), np.median, n_resamples=2000, method="percentile", confidence_level=confidence,
-        random_state=np.random.default_rng(seed),
-    ).confidence_interval  # fmt: skip
-    return [float(interval.low), float(interval.high)]
 
 
 def paired_difference(
@@ -158,21 +110,6 @@ def equivalence(
     se = float(np.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b)))
     p = _tost_p(mean, se, welch["df"], margin)
     return {"margin": margin, "p": p, "bound": max(abs(low), abs(high))}
-
-
-def holm(pvalues: Sequence[float] | np.ndarray) -> np.ndarray:
-    """Holm's step-down adjusted p-values (in the given order): the smallest of m p-values times
-    m, the next times m - 1, …, each at least the one before it, at most 1. A hypothesis is
-    rejected at family-wise level α when its adjusted p-value is at most α."""
-    p = np.asarray(pvalues, dtype=float)
-    if np.any(np.isnan(p)) or np.any((p < 0) | (p > 1)):
-        raise ValueError(f"Holm needs p-values in [0, 1], got {p.tolist()}")
-    m = len(p)
-    order = np.argsort(p, kind="stable")
-    stepped = np.maximum.accumulate(np.minimum(1.0, (m - np.arange(m)) * p[order]))
-    adjusted = np.empty(m)
-    adjusted[order] = stepped
-    return adjusted
 
 
 def paired_equivalence(differences: Sequence[float] | np.ndarray, margin: float) -> dict[str, Any]:
@@ -272,49 +209,6 @@ def detectable(sd: float, n: int, alpha: float = ALPHA, power: float = 0.8) -> f
     return float(hi * sd / np.sqrt(n))
 
 
-def _pairs_above(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The share of pairs (x_i, y_j) with x_i > y_j, ties (within :data:`TIE`) half, over the last
-    axis of each (leading axes: resamples)."""
-    gap = x[..., :, None] - y[..., None, :]
-    above = gap > TIE
-    tied = np.abs(gap) <= TIE
-    return (above + 0.5 * tied).mean(axis=(-2, -1))
-
-
-def probability_of_improvement(xs: Sequence[np.ndarray], ys: Sequence[np.ndarray]) -> float:
-    """P(X > Y) averaged over panels (Agarwal et al. 2021): per panel the Mann–Whitney U of its
-    runs' scores over the number of pairs (ties count half), then the mean over panels."""
-    return float(
-        np.mean([_pairs_above(np.asarray(x, float), np.asarray(y, float)) for x, y in zip(xs, ys, strict=True)])
-    )
-
-
-def improvement_interval(
-    xs: Sequence[np.ndarray],
-    ys: Sequence[np.ndarray],
-    seed: int = 0,
-    resamples: int = RESAMPLES,
-    confidence: float = CONFIDENCE,
-) -> dict[str, Any]:
-    """:func:`probability_of_improvement` with a percentile interval from the stratified
-    bootstrap of Agarwal et al. (2021): each panel's runs of each variant resampled with
-    replacement within the panel, the statistic recomputed over all panels."""
-    rng = np.random.default_rng(seed)
-    draws = np.zeros(resamples)
-    for x, y in zip(xs, ys, strict=True):
-        x, y = np.asarray(x, float), np.asarray(y, float)
-        rx = x[rng.integers(0, len(x), (resamples, len(x)))]
-        ry = y[rng.integers(0, len(y), (resamples, len(y)))]
-        draws += _pairs_above(rx, ry) / len(xs)
-    low, high = np.quantile(draws, [(1 - confidence) / 2, (1 + confidence) / 2])
-    return {
-        "value": probability_of_improvement(xs, ys),
-        "ci": [float(low), float(high)],
-        "panels": len(xs),
-        "resamples": resamples,
-    }
-
-
 def slope_test(curves: Sequence[np.ndarray], x: np.ndarray, tolerance: float, alpha: float = ALPHA) -> dict[str, Any]:
     """Whether curves (one per seed, sampled at ``x``) still move: each seed's least-squares
     slope, the slopes' mean over seeds with its t-interval, and the verdict ``rising``,
@@ -340,31 +234,6 @@ def slope_test(curves: Sequence[np.ndarray], x: np.ndarray, tolerance: float, al
         "verdict": verdict,
         "detectable": detectable(sd, len(slopes), alpha) if len(slopes) > 1 else None,
     }
-
-
-def coverage(draw: Any, truth: float, n: int, draws: int, seed: int = 0, confidence: float = CONFIDENCE) -> float:
-    """The fraction of ``draws`` samples of size ``n`` (``draw(rng, shape)``) whose t-interval
-    holds ``truth``: how often the interval :func:`t_interval` reports means what it says."""
-    rng = np.random.default_rng(seed)
-    samples = np.asarray(draw(rng, (draws, n)), dtype=float)
-    held = 0
-    for sample in samples:
-        low, high = t_interval(sample, confidence) or (np.nan, np.nan)
-        held += low <= truth <= high
-    return held / draws
-
-
-def wilson_interval(count: int, n: int, confidence: float = CONFIDENCE) -> list[float]:
-    """Wilson's score interval of a share ``count / n`` (the failure shares of the rule study):
-    it stays inside [0, 1] and keeps near its level at 10–30 runs where the normal (Wald)
-    interval does not (``scripts/interval_coverage.py`` measures it)."""
-    if not 0 <= count <= n or n < 1:
-        raise ValueError(f"a share needs 0 <= count <= n and n >= 1, got {count} of {n}")
-    z = float(stats.norm.ppf(0.5 + confidence / 2))
-    share = count / n
-    centre = (share + z * z / (2 * n)) / (1 + z * z / n)
-    half = z / (1 + z * z / n) * np.sqrt(share * (1 - share) / n + z * z / (4 * n * n))
-    return [max(0.0, float(centre - half)), min(1.0, float(centre + half))]
 
 
 def share_difference(count_a: int, n_a: int, count_b: int, n_b: int) -> dict[str, Any]:

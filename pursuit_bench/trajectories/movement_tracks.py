@@ -15,7 +15,7 @@ from pursuit_bench.env.world import DT
 from pursuit_bench.io import tracks
 
 if TYPE_CHECKING:
-    from pursuit_bench.training.recording import EpisodeTrace
+    from pursuit_bench.trajectories.recording import EpisodeTrace
 
 
 class MovementTracks:

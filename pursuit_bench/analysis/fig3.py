@@ -1,4 +1,4 @@
-"""Fig. 3 written into a folder: the analysis of one run's predators (:mod:`pursuit_bench.study.analysis`)
+"""Fig. 3 written into a folder: the analysis of one run's predators (:mod:`pursuit_bench.analysis.behaviour`)
 as fig3.png, modes.png, analysis.json and analysis.rrd, and the chase modes of a sweep's runs
 over seeds. What ``pursuit-bench analyze`` calls.
 """
@@ -12,13 +12,14 @@ from typing import Any
 
 import numpy as np
 
+from pursuit_bench import stats
+from pursuit_bench.analysis import behaviour as analysis
 from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.figures.plots import fig3_png, modes_png
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
-from pursuit_bench.study import analysis, statistics
-from pursuit_bench.study.plots import fig3_png, modes_png
 from pursuit_bench.training import runs
-from pursuit_bench.training.recording import record_embedding
 from pursuit_bench.training.train import TrainConfig
+from pursuit_bench.trajectories.recording import record_embedding
 
 
 def analyze_run(folder: Path, config: TrainConfig, agents: dict[str, Any], episodes: int, seed: int) -> dict[str, Any]:
@@ -102,7 +103,7 @@ def analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> dict[str, Any
             "p_chase": mean,
             "p_chase_ci": cis,
             "chase_onset_median": float(np.median(onset)) if len(onset) else None,
-            "chase_onset_ci": statistics.t_interval(onset),
+            "chase_onset_ci": stats.t_interval(onset),
         }
         curves[label] = {
             "bins": analysis.DISTANCE_BINS.tolist(),
@@ -122,5 +123,5 @@ def analyze_sweep(sweep_folder: Path, episodes: int, seed: int) -> dict[str, Any
 
 def _proportion_interval(values: np.ndarray) -> list[float] | None:
     """The t-interval over seeds of a proportion's mean, kept inside [0, 1]."""
-    ci = statistics.t_interval(values)
+    ci = stats.t_interval(values)
     return None if ci is None else [max(ci[0], 0.0), min(ci[1], 1.0)]
