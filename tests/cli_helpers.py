@@ -1,9 +1,12 @@
-"""Running the command line in tests: in-process through click's runner, or as a real process."""
+"""Running the command line in tests: in-process through click's runner, or as a real process; and
+the checkout's scripts loaded by path."""
 
+import importlib.util
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 
 from click.testing import CliRunner
 
@@ -40,3 +43,20 @@ def lines(path: Path) -> int:
         return path.read_text().count("\n")
     except FileNotFoundError:
         return 0
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_script(relative: str) -> ModuleType:
+    """A script of the checkout (``docs/gen/law_tables.py``, ``studies/coverage/interval_coverage.py``)
+    loaded as a module by its path, once: scripts are not a package, and no test edits ``sys.path``."""
+    name = "script_" + relative.removesuffix(".py").replace("/", "_").replace("-", "_")
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, ROOT / relative)
+    assert spec is not None and spec.loader is not None, relative
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # before running it: dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    return module

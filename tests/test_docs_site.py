@@ -25,12 +25,12 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from cli_helpers import load_script
 
 import pursuit_bench
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-import docs_site
-import site_check
+docs_site = load_script("docs/hooks.py")
+site_check = load_script("scripts/site_check.py")
 
 ROOT = docs_site.ROOT
 

@@ -2,14 +2,13 @@
 placement rule, range readings against a naive computation, avoidance, the checkers, the CLI."""
 
 import json
-import sys
 import warnings
 from pathlib import Path
 
 import gymnasium
 import numpy as np
 import pytest
-from cli_helpers import run_cli
+from cli_helpers import load_script, run_cli
 from gymnasium.utils.env_checker import check_env
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -29,15 +28,14 @@ from pursuit_bench.rules.policies import AlwaysChase, FleeingPrey
 from pursuit_bench.training.evaluate import run_episodes
 from pursuit_bench.trajectories.recording import Recorder
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
-import make_paper_trajectories
+make_paper_trajectories = load_script("tests/reference/paper_trajectories.py")
 
 DATA = Path(__file__).parent / "data" / "paper-trajectories.json"
 
 
 @pytest.mark.parametrize("case", json.loads(DATA.read_text())["cases"], ids=lambda c: "-".join(map(str, c["case"][:3])))
 def test_without_obstacles_the_trajectories_are_those_before_obstacles_existed(case: dict) -> None:
-    # digests written by the commit before obstacles (scripts/make_paper_trajectories.py)
+    # digests written by the commit before obstacles (tests/reference/paper_trajectories.py, run on that checkout)
     assert make_paper_trajectories.digests(tuple(case["case"])) == case["sha256"]
 
 
@@ -289,7 +287,7 @@ def test_train_and_eval_with_obstacles(tmp_path: Path) -> None:
 
 
 def test_the_experiment_table_in_the_docs_is_what_the_committed_results_say() -> None:
-    import obstacle_study
+    obstacle_study = load_script("studies/obstacles/obstacle_study.py")
 
     table = obstacle_study.markdown(obstacle_study.rows())
     assert table in (Path(__file__).parents[1] / "docs" / "obstacles.md").read_text()

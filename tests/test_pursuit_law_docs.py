@@ -1,4 +1,4 @@
-"""docs/pursuit-law.md against its sources: every table in it is what scripts/law_tables.py prints
+"""docs/pursuit-law.md against its sources: every table in it is what docs/gen/law_tables.py prints
 from results/pursuit-law/, and those files are what the code gives (a few selections redone)."""
 
 import importlib.util
@@ -9,6 +9,7 @@ from types import ModuleType
 
 import numpy as np
 import pytest
+from cli_helpers import load_script
 
 from pursuit_bench.laws import guidance
 from pursuit_bench.laws.synthetic_attacks import TrueLaw, attack
@@ -18,12 +19,11 @@ DOC = ROOT / "docs" / "pursuit-law.md"
 RESULTS = ROOT / "results" / "pursuit-law"
 
 
+SCRIPTS = {"law_tables": "docs/gen/law_tables.py", "law_validation": "studies/pursuit-law/law_validation.py"}
+
+
 def _script(name: str) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(name, ROOT / "scripts" / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(SCRIPTS[name])
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +59,7 @@ def test_the_doc_holds_every_table_as_its_script_prints_it(tables: dict[str, str
 
 
 def test_every_table_of_the_doc_is_generated_but_the_laws(tables: dict[str, str]) -> None:
-    """No hand-typed table: each one is a generated table (scripts/law_tables.py's, or the tracked
+    """No hand-typed table: each one is a generated table (docs/gen/law_tables.py's, or the tracked
     laws' confusion matrix from studies/tracked-laws/validation.json), or the method's list of laws."""
     spec = importlib.util.spec_from_file_location("tracked_validate", ROOT / "studies" / "tracked-laws" / "validate.py")
     assert spec is not None and spec.loader is not None
@@ -69,12 +69,12 @@ def test_every_table_of_the_doc_is_generated_but_the_laws(tables: dict[str, str]
     generated = [*tables.values(), validate.confusion_table(tracked)]
     for table in _doc_tables(DOC.read_text()):
         if table not in generated and not table.startswith("| law | heading |"):
-            pytest.fail(f"a table scripts/law_tables.py does not print: {table.splitlines()[0]}")
+            pytest.fail(f"a table docs/gen/law_tables.py does not print: {table.splitlines()[0]}")
 
 
 def test_the_doc_says_how_to_regenerate_and_reads_mixed_as_not_separable(tables: dict[str, str]) -> None:
     text = DOC.read_text()
-    for command in ("python scripts/law_validation.py", "python scripts/law_tables.py --shipped"):
+    for command in ("python studies/pursuit-law/law_validation.py", "python docs/gen/law_tables.py --shipped"):
         assert command in text
     assert "pn or mixed, not separable at 10 Hz" in tables["sweep"].splitlines()[0]
     assert "is a real one" not in text

@@ -12,11 +12,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_helpers import run_cli
+from cli_helpers import load_script, run_cli
 from scipy import stats
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "scripts"))
-import check_readme
+check_readme = load_script("scripts/check_readme.py")
 
 
 def test_the_readme_quotes_the_shipped_agents_as_the_main_job_evaluates_them(tmp_path: Path) -> None:

@@ -3,10 +3,10 @@ regenerated from them, without the run folders, gives the tables REPRODUCTION.md
 
 import gzip
 import json
-import sys
 from pathlib import Path
 
 import pytest
+from cli_helpers import load_script
 
 from pursuit_bench.reports import reproduction as report
 
@@ -96,11 +96,7 @@ def test_the_json_keeps_full_precision_and_every_comparison(regenerated: tuple[d
 
 
 def test_the_authors_agents_figures_are_the_committed_data() -> None:
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        import authors_agents
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
+    authors_agents = load_script("docs/gen/authors_agents.py")
     rows = authors_agents.load()
     assert len(rows) == 10 and {r["prey"] for r in rows} == {"greedy", "ε = 0.1"}
     assert authors_agents.markdown(rows) in (ROOT / "docs" / "authors-agents.md").read_text()

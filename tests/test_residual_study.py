@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from cli_helpers import load_script
 
 from pursuit_bench import pretrained
 from pursuit_bench.reports import rule_study
@@ -412,12 +413,8 @@ def test_a_tiny_run_of_an_obstacle_setting_trains_its_own_population_and_all_thr
 
 
 def _descriptives() -> ModuleType:
-    """scripts/residual_descriptives.py, loaded as a module."""
-    path = ROOT / "scripts" / "residual_descriptives.py"
-    spec = importlib.util.spec_from_file_location("residual_descriptives", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    """studies/residual-value/residual_descriptives.py, loaded as a module."""
+    module = load_script("studies/residual-value/residual_descriptives.py")
     return module
 
 
@@ -503,7 +500,7 @@ def test_the_ladder_levels_are_each_kind_s_mean_margin_at_each_level() -> None:
 
 def test_the_committed_descriptives_are_what_their_script_gives() -> None:
     """results/residual-study/descriptives.md (docs/residual.md cites it) is what
-    scripts/residual_descriptives.py computes from the committed runs, its first line (the
+    studies/residual-value/residual_descriptives.py computes from the committed runs, its first line (the
     command) aside."""
     summary = _descriptives()
     committed = (ROOT / "results" / "residual-study" / "descriptives.md").read_text().splitlines()
@@ -513,7 +510,7 @@ def test_the_committed_descriptives_are_what_their_script_gives() -> None:
 def test_the_descriptives_script_refuses_a_folder_without_residual_runs_in_one_line(tmp_path: Path) -> None:
     """No runs, no residual run (a hierarchical one only), or a file that is not a compact run:
     one line naming the folder, exit status 1."""
-    script = ROOT / "scripts" / "residual_descriptives.py"
+    script = STUDY / "residual_descriptives.py"
     (tmp_path / "runs").mkdir()
     hierarchical = gzip.compress(json.dumps(_run_with_corrections("hierarchical", 0, 0.0, 0.0, 0.0)).encode())
     for content in (None, hierarchical, b"not gzip"):

@@ -4,12 +4,12 @@ and quoted intervals are what the committed result gives."""
 
 import json
 import re
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from cli_helpers import load_script
 from scipy import stats as scipy_stats
 
 from pursuit_bench import stats
@@ -17,8 +17,7 @@ from pursuit_bench.analysis import robustness
 from pursuit_bench.reports import pool
 
 ROOT = Path(__file__).parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-import robustness_study  # noqa: E402
+robustness_study = load_script("studies/robustness/robustness_study.py")
 
 #: An interval as the tables print it (``-0.498 [-0.721, -0.275]``) or the text quotes it
 #: (``−0.498 [−0.721, −0.275]``, or a loss unsigned: ``0.137 [0.017, 0.258]``).

@@ -3,7 +3,6 @@ direct evaluation of the same episodes, the scored run kept out of its populatio
 interval's coverage, the aggregate, the refusals, and the leaderboard page regenerated."""
 
 import dataclasses
-import importlib.util
 import json
 import pickle
 import sys
@@ -13,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 import torch
-from cli_helpers import run_cli
+from cli_helpers import load_script, run_cli
 from scipy import stats
 from scipy.special import expit
 
@@ -459,11 +458,7 @@ def test_bad_input_is_refused_in_one_line_and_writes_nothing(
 
 
 def _leaderboard() -> Any:
-    spec = importlib.util.spec_from_file_location("leaderboard", ROOT / "scripts" / "leaderboard.py")
-    assert spec is not None and spec.loader is not None
-    leaderboard = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(leaderboard)
-    return leaderboard
+    return load_script("docs/gen/leaderboard.py")
 
 
 def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:

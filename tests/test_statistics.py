@@ -2,11 +2,11 @@
 
 import math
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_helpers import load_script
 from scipy import stats as scipy_stats
 
 from pursuit_bench import stats
@@ -201,14 +201,10 @@ def test_the_median_interval_against_the_exact_bootstrap_distribution() -> None:
 @pytest.mark.slow
 @pytest.mark.long
 def test_statistics_md_prints_what_its_script_gives() -> None:
-    """docs/stats.md's coverage table and skewness figures are what
-    scripts/interval_coverage.py computes (seeded: the same every time)."""
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        import interval_coverage
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
-    text = (ROOT / "docs" / "stats.md").read_text()
+    """docs/statistics.md's coverage table and skewness figures are what
+    studies/coverage/interval_coverage.py computes (seeded: the same every time)."""
+    interval_coverage = load_script("studies/coverage/interval_coverage.py")
+    text = (ROOT / "docs" / "statistics.md").read_text()
     assert interval_coverage.coverage_markdown() in text
     figures = interval_coverage.skewness_figures()
     ours, normal, mild, strong = (f"{v:+.2f}".replace("-", "−") for v in figures.values())
@@ -296,16 +292,11 @@ def test_measures_equal_but_for_their_last_bits_are_ties() -> None:
 
 
 def _study_coverage():  # type: ignore[no-untyped-def]
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        import study_coverage
-    finally:
-        sys.path.remove(str(ROOT / "scripts"))
-    return study_coverage
+    return load_script("studies/coverage/study_coverage.py")
 
 
 def test_a_study_s_coverage_check_finds_the_known_answers() -> None:
-    """scripts/study_coverage.py's resampled worlds: normal runs give Welch's interval about its
+    """studies/coverage/study_coverage.py's resampled worlds: normal runs give Welch's interval about its
     95 %; one run of 30 carrying the whole difference gives what counting says, since a draw
     without it (probability (29/30)^30) has an interval of width 0 that misses the truth."""
     study_coverage = _study_coverage()
@@ -321,7 +312,7 @@ def test_a_study_s_coverage_check_finds_the_known_answers() -> None:
 @pytest.mark.long
 def test_the_residual_study_s_committed_coverage_is_what_its_script_gives() -> None:
     """results/residual-study/interval-coverage.md (docs/residual.md cites it) is what
-    scripts/study_coverage.py computes from the committed runs (seeded)."""
+    studies/coverage/study_coverage.py computes from the committed runs (seeded)."""
     study_coverage = _study_coverage()
     committed = (ROOT / "results" / "residual-study" / "interval-coverage.md").read_text()
     assert committed.endswith(study_coverage.tables(ROOT / "results" / "residual-study"))

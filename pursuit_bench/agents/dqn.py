@@ -36,7 +36,7 @@ WALL_FEATURES = 2
 #: Two Q-values closer than this (relative to the row's :func:`decision_scale`) are left to
 #: torch's forward pass to order (:meth:`DQNLearner.decisive_q`). The compiled pass differs from
 #: torch's by at most 3.1e-7 of that scale so measured (every Q-value the shipped agents of all
-#: ten conditions computed in an evaluation of 200 episodes a variant, ``scripts/decisive_check.py``;
+#: ten conditions computed in an evaluation of 200 episodes a variant, ``benchmarks/decisive_check.py``;
 #: ``tests/test_fused.py`` keeps measuring it): a measured bound, not a proven one.
 DECISIVE_GAP = 4e-6
 

@@ -52,7 +52,7 @@ SCORE_FORMAT = "pursuit-bench-score-1"
 LEADERBOARD_EPISODES = 20
 LEADERBOARD_SEED = 12345
 #: The leaderboard's rows as ``score`` places a result among them (:func:`standing`): written with
-#: docs/leaderboard.md by scripts/leaderboard.py, shipped in the package.
+#: docs/leaderboard.md by docs/gen/leaderboard.py, shipped in the package.
 LEADERBOARD = Path(__file__).with_name("leaderboard.json")
 
 

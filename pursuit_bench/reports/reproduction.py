@@ -9,7 +9,7 @@ by seed; Holm's correction over the family of comparisons gives every panel a ve
 not resolved, worse); the paper's strict count is made seed by seed; the probability of
 improvement aggregates over panels; unresolved comparisons get a power figure; the margins'
 slope over the last 30 % of training says whether they still move. Every statistic comes from
-:mod:`pursuit_bench.stats` (docs/stats.md); this module arranges the data and writes
+:mod:`pursuit_bench.stats` (docs/statistics.md); this module arranges the data and writes
 the tables and figures.
 """
 
@@ -885,7 +885,7 @@ def write(where: Path, out: Path | None = None) -> dict[str, Any]:
             f"evaluation episodes), with a 95 % t-interval over seeds and a one-sided paired t-test per direction, "
             f"Holm-corrected over the {totals['comparisons']} comparisons at {stats.ALPHA} a direction, and "
             f"two one-sided paired tests for equivalence within ±{stats.EQUIVALENCE_MARGIN} (Holm alike) "
-            "(docs/stats.md).",
+            "(docs/statistics.md).",
             "",
             f"- **{totals['better']} better, {totals['equivalent']} equivalent, {totals['not resolved']} not "
             f"resolved, {totals['worse']} worse** of {totals['panels']} panels.",

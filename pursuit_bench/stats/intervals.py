@@ -32,7 +32,7 @@ def t_interval(values: Sequence[float] | np.ndarray, confidence: float = CONFIDE
 
 
 #: Fewest values a median's interval is given for: below it the percentile bootstrap covers far
-#: less than it claims (lognormal data: 74 % at 3 values, 93–94 % at 5–20; ``scripts/interval_coverage.py``).
+#: less than it claims (lognormal data: 74 % at 3 values, 93–94 % at 5–20; ``studies/coverage/interval_coverage.py``).
 MEDIAN_MIN = 5
 
 
@@ -66,7 +66,7 @@ def coverage(draw: Any, truth: float, n: int, draws: int, seed: int = 0, confide
 def wilson_interval(count: int, n: int, confidence: float = CONFIDENCE) -> list[float]:
     """Wilson's score interval of a share ``count / n`` (the failure shares of the rule study):
     it stays inside [0, 1] and keeps near its level at 10–30 runs where the normal (Wald)
-    interval does not (``scripts/interval_coverage.py`` measures it)."""
+    interval does not (``studies/coverage/interval_coverage.py`` measures it)."""
     if not 0 <= count <= n or n < 1:
         raise ValueError(f"a share needs 0 <= count <= n and n >= 1, got {count} of {n}")
     z = float(stats.norm.ppf(0.5 + confidence / 2))

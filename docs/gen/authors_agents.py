@@ -1,7 +1,7 @@
 """The authors' trained agents in their own environment (docs/authors-agents.md, REPRODUCTION.md):
 the table and the ranges REPRODUCTION.md quotes, from results/authors-agents/measurements.json.
 
-    python scripts/authors_agents.py
+    python docs/gen/authors_agents.py
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "results" / "authors-agents" / "measurements.json"
 
 

@@ -1,7 +1,7 @@
 """A real client of the continuous single-agent view: Stable-Baselines3's SAC trains a predator
 against the scripted `FleeingPrey` and is compared with a random policy on the same seeds.
 
-    python scripts/sac_client.py [--condition 1p-low] [--steps 20000] [--episodes 100]
+    python examples/sac_client.py [--condition 1p-low] [--steps 20000] [--episodes 100]
 
 Prints the mean return (and capture rate) of the trained policy, deterministic, and of uniform
 random actions, over the same evaluation seeds; the README quotes a run.

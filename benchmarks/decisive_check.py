@@ -3,7 +3,7 @@ twice, acting by the compiled forward pass (falling back to torch's where a deci
 by torch's network alone, and the largest difference between the two passes' Q-values seen,
 relative to each row's decision scale (agents/dqn.py, DECISIVE_GAP).
 
-    python scripts/decisive_check.py [--episodes 200]   # writes results/speed/decisive-check.json
+    python benchmarks/decisive_check.py [--episodes 200]   # writes results/speed/decisive-check.json
 
 Exits 1 if an evaluation differs or the difference comes within a quarter of the gap.
 """
@@ -64,7 +64,7 @@ def main() -> int:
         print(f"{condition}: identical {fast == slow}, largest difference {worst[0]:.3g} of the scale")
     largest = max(r["largest_difference"] for r in rows)
     payload = {
-        "command": f"python scripts/decisive_check.py --episodes {args.episodes}",
+        "command": f"python benchmarks/decisive_check.py --episodes {args.episodes}",
         "episodes_per_variant": args.episodes,
         "decisive_gap": DECISIVE_GAP,
         "largest_difference": largest,

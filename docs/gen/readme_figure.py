@@ -2,7 +2,7 @@
 (PettingZoo's parallel env, the agents greedy), each predator's path dark where it stalks and
 bright where it chases, beside the paper's question.
 
-    python scripts/readme_figure.py    # docs/figures/episode.png
+    python docs/gen/readme_figure.py    # docs/figures/episode.png
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from pursuit_bench.env.render import agent_rgb, dimmed
 from pursuit_bench.env.world import HALF_SIZE
 from pursuit_bench.io.files import atomic_write_bytes
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FIGURE = ROOT / "docs" / "figures" / "episode.png"
 CONDITION, SEED = "2p-high-individual", 7
 

@@ -1,15 +1,15 @@
 """docs/pursuit-law.md's tables, from the files in results/pursuit-law/:
 
-- ``validation.json`` and ``confusion.json`` (``python scripts/law_validation.py``): attacks
+- ``validation.json`` and ``confusion.json`` (``python studies/pursuit-law/law_validation.py``): attacks
   with a known answer;
 - ``shipped-1p-low.json``: the shipped 1p-low agents and the scripted predators in their
   places, 20 episodes (``--shipped`` plays and fits them, about 30 s);
 - ``sweep-summary.json``: the summaries ``pursuit-bench law SWEEP --episodes 5`` wrote for the
   reproduction sweep's hierarchical and flat runs (``--collect`` merges them).
 
-    python scripts/law_tables.py --shipped                                            # writes the file
-    python scripts/law_tables.py --collect sweeps/repro1000 sweeps/repro1000-flat     # writes the file
-    python scripts/law_tables.py                                                      # prints the tables
+    python docs/gen/law_tables.py --shipped                                            # writes the file
+    python docs/gen/law_tables.py --collect sweeps/repro1000 sweeps/repro1000-flat     # writes the file
+    python docs/gen/law_tables.py                                                      # prints the tables
 
 ``tables()`` gives them by name; tests/test_pursuit_law_docs.py checks that the doc holds each.
 """
@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-RESULTS = Path(__file__).resolve().parent.parent / "results" / "pursuit-law"
+RESULTS = Path(__file__).resolve().parents[2] / "results" / "pursuit-law"
 SUMMARY = RESULTS / "sweep-summary.json"
 SHIPPED = RESULTS / "shipped-1p-low.json"
 #: The shipped agents fitted for the doc: condition, episodes, seed.

@@ -4,10 +4,10 @@ normal and lognormal data, at 3, 5 and 10 seeds; 4000 simulated sets each; Welch
 equivalence test at the pool study's 8 runs a kind and at the rule study's 10, 20 and 30 (with
 Wilson's interval of a failure share and the seed rule's type I error); and the median's
 interval the pursuit-law fits give over attacks, at 3–20 values. Prints the tables
-docs/stats.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
+docs/statistics.md and docs/pursuit-law.md quote (seeded: the same table every time), then how skewed the seed-level
 differences of results/reproduction are beside the simulated data, by the same measure.
 
-    python scripts/interval_coverage.py
+    python studies/coverage/interval_coverage.py
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from scipy import stats as scipy_stats
 from pursuit_bench import stats
 from pursuit_bench.reports import reproduction as report
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 DRAWS = 4000
 RESAMPLES = 2000
@@ -168,7 +168,7 @@ def pooled_skewness(groups: np.ndarray | list[np.ndarray]) -> float:
 
 
 def coverage_markdown() -> str:
-    """docs/stats.md's coverage table: the t-interval beside the percentile bootstrap."""
+    """docs/statistics.md's coverage table: the t-interval beside the percentile bootstrap."""
     lines = ["| data | seeds | t-interval | percentile bootstrap |", "|---|---:|---:|---:|"]
     for label, draw, truth in DISTRIBUTIONS:
         for n in SEEDS:
@@ -181,7 +181,7 @@ def coverage_markdown() -> str:
 def skewness_figures() -> dict[str, float]:
     """How skewed the reproduction's seed-level differences are (pooled over its comparisons,
     standardised within each), and the same measure on as many simulated groups of each
-    distribution: docs/stats.md quotes them."""
+    distribution: docs/statistics.md quotes them."""
     table = report.panel_table(report.collect(ROOT / "results" / "reproduction"))
     ours = [np.array(c["differences"]) for t in table for c in t.get("paired", {}).values()]
     n, rng = len(ours[0]), np.random.default_rng(0)

@@ -5,12 +5,12 @@ budget), runs are drawn with replacement from each kind's committed runs, as man
 how often Welch's interval (`stats.welch_difference`, the report's) holds it. The same for
 the robustness ladders' paired t-intervals (residual − hierarchical change of margin, seeds
 resampled as pairs). Where a kind's runs split (some fail, some excel), this is the coverage at
-that split, not at a normal one (docs/stats.md's tables simulate shapes chosen beforehand).
+that split, not at a normal one (docs/statistics.md's tables simulate shapes chosen beforehand).
 
 The world is the committed runs themselves, so its tails are no longer than the data's: a
 coverage well below 95 % here is a warning, one near 95 % is not a guarantee.
 
-    python scripts/study_coverage.py results/residual-study --out results/residual-study/interval-coverage.md
+    python studies/coverage/study_coverage.py results/residual-study --out results/residual-study/interval-coverage.md
 
 Seeded by each row's own name: the same table every time for the same runs, and a row keeps its
 value when other settings are added.
@@ -127,7 +127,7 @@ def main() -> None:
         sys.exit(f"{args.study}: {error}")
     print(text, end="")
     if args.out is not None:
-        atomic_write_text(args.out, f"`python scripts/study_coverage.py {args.study}`\n\n{text}")
+        atomic_write_text(args.out, f"`python studies/coverage/study_coverage.py {args.study}`\n\n{text}")
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@ and episode ends of random rollouts in the paper's empty arena, for ``tests/test
 to check that ``obstacles=0`` still gives them bit for bit. Written from the commit before
 obstacles existed (the package imported from that checkout):
 
-    PYTHONPATH=OLD_CHECKOUT python scripts/make_paper_trajectories.py tests/data/paper-trajectories.json
+    PYTHONPATH=OLD_CHECKOUT python tests/reference/paper_trajectories.py tests/data/paper-trajectories.json
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """The prey-learning study of docs/learning.md: each variant a sweep of 1p-high against a fixed
 always-stalk predator (the prey the only learner), three seeds, then a figure and a table.
 
-    python scripts/prey_study.py run STUDY_DIR [VARIANT ...]   # the sweeps (resumable)
-    python scripts/prey_study.py figure STUDY_DIR OUT.png      # curves and the table
+    python studies/prey-learning/prey_study.py run STUDY_DIR [VARIANT ...]   # the sweeps (resumable)
+    python studies/prey-learning/prey_study.py figure STUDY_DIR OUT.png      # curves and the table
 
 Each variant is a name and the sweep options it adds to the quick preset (VARIANTS below).
 """

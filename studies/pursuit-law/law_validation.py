@@ -13,11 +13,11 @@ known (:mod:`pursuit_bench.laws.synthetic_attacks`), every law fitted and one ch
   :data:`LENGTHS`. Writes results/pursuit-law/confusion.json.
 
 Every selection is written in full: each law's gains, delay, censoring, error and criterion, the
-floor and the laws under it. ``python scripts/law_tables.py`` prints the docs' tables from these
+floor and the laws under it. ``python docs/gen/law_tables.py`` prints the docs' tables from these
 files.
 
-    python scripts/law_validation.py                 # both parts, about 3 min on one core
-    python scripts/law_validation.py --parts confusion
+    python studies/pursuit-law/law_validation.py                 # both parts, about 3 min on one core
+    python studies/pursuit-law/law_validation.py --parts confusion
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from pursuit_bench.io.files import atomic_write_text
 from pursuit_bench.laws import guidance
 from pursuit_bench.laws.synthetic_attacks import TrueLaw, attack
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "results" / "pursuit-law"
 DT = 0.1
 #: Attacks per validation case (seeds 0 … 4, the tests' too).
@@ -190,7 +190,7 @@ def main() -> None:
         profile_png(ROOT / "docs" / "figures" / "law-profile.png")
     if "confusion" in args.parts:
         atomic_write_text(RESULTS / "confusion.json", json.dumps(confusion(), indent=1) + "\n")
-    print("written: results/pursuit-law/; the docs' tables: python scripts/law_tables.py")
+    print("written: results/pursuit-law/; the docs' tables: python docs/gen/law_tables.py")
 
 
 if __name__ == "__main__":

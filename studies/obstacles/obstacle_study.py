@@ -1,7 +1,8 @@
 """The obstacle experiment (docs/obstacles.md): its table and figure from compact results.
 
-    python scripts/obstacle_study.py --export sweeps/obstacles sweeps/obstacles-noavoid   # once, after the sweeps
-    python scripts/obstacle_study.py                                                       # table and figure
+    # once, after the sweeps:
+    python studies/obstacles/obstacle_study.py --export sweeps/obstacles sweeps/obstacles-noavoid
+    python studies/obstacles/obstacle_study.py                                                       # table and figure
 
 ``--export`` writes the two sweeps' results into ``results/obstacles/avoidance`` and
 ``results/obstacles/plain`` (``report.export``: gzip JSON per run). Without it, the table (printed,
@@ -23,7 +24,7 @@ from pursuit_bench import stats
 from pursuit_bench.io.files import atomic_write_bytes
 from pursuit_bench.reports import reproduction as report
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "results" / "obstacles"
 FIGURE = ROOT / "docs" / "figures" / "obstacles.png"
 CONDITIONS = ("1p-high", "2p-high-shared", "3p-high-individual")

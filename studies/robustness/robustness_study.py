@@ -2,9 +2,9 @@
 
     pursuit-bench robust sweeps/repro1000 sweeps/repro1000-flat --seeds 5 \\
         --conditions 1p-high,2p-high-individual,2p-low-shared,3p-high-shared --out sweeps/robust
-    python scripts/robustness_study.py --export sweeps/robust   # once: results/robustness/robust.json.gz
-    python scripts/robustness_study.py                          # tables (printed) and docs/figures/robustness.png
-    python scripts/robustness_study.py --doc                    # the tables written into docs/robustness.md
+    python studies/robustness/robustness_study.py --export sweeps/robust   # once: results/robustness/robust.json.gz
+    python studies/robustness/robustness_study.py  # tables (printed) and docs/figures/robustness.png
+    python studies/robustness/robustness_study.py --doc                    # the tables written into docs/robustness.md
 
 The committed file holds every evaluation (per run and rung, and cross-play); the summaries and
 the tests (``robustness.families``: each family corrected by Holm) are recomputed from them
@@ -27,11 +27,11 @@ from pursuit_bench.analysis import robustness
 from pursuit_bench.figures.plots import robust_png
 from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RESULT = ROOT / "results" / "robustness" / "robust.json.gz"
 FIGURE = ROOT / "docs" / "figures" / "robustness.png"
 DOC = ROOT / "docs" / "robustness.md"
-COMMAND = "python scripts/robustness_study.py --doc"
+COMMAND = "python studies/robustness/robustness_study.py --doc"
 #: A generated block of the doc: its name, then the table as :func:`robustness.sections` gives it.
 BLOCK = re.compile(r"<!-- generated: (?P<name>[\w-]+) .*?-->\n(?P<body>.*?)<!-- end generated: (?P=name) -->", re.S)
 

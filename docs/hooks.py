@@ -1,4 +1,4 @@
-"""The documentation site's MkDocs hooks (``mkdocs.yml``: ``hooks: [scripts/docs_site.py]``).
+"""The documentation site's MkDocs hooks (``mkdocs.yml``: ``hooks: [docs/hooks.py]``).
 
 What the site generates from the code at build time rather than retyping it:
 

@@ -3,7 +3,7 @@
 1-predator condition, and the agent module that plays it (``predator(condition=…)``: the model
 trained in the condition it is asked to play).
 
-    python scripts/ppo_leaderboard.py            # trains runs/ppo-leaderboard/<condition>.zip
+    python studies/leaderboard/ppo_leaderboard.py            # trains runs/ppo-leaderboard/<condition>.zip
     pursuit-bench score scripts.ppo_leaderboard:predator --role predator --conditions 1p-high,1p-low …
 
 The models are generated files (not in git); the budget is TIMESTEPS per condition, seed 0,
@@ -43,7 +43,9 @@ def predator(condition: str) -> Predator:
     """The model trained in ``condition`` (the score command passes the condition it plays)."""
     path = FOLDER / f"{condition}.zip"
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no model for {condition}; train it first (python scripts/ppo_leaderboard.py)")
+        raise FileNotFoundError(
+            f"{path}: no model for {condition}; train it first (python studies/leaderboard/ppo_leaderboard.py)"
+        )
     return Predator(path)
 
 

@@ -18,7 +18,8 @@ smaller drop can start from a lower level. This table gives each kind's mean mar
 own prey, mean over predators and runs) at every level of the ladders the runs hold, residual and
 hierarchical (— where a run of the group lacks the level). No test. Settings in the report's order.
 
-    python scripts/residual_descriptives.py results/residual-study --out results/residual-study/descriptives.md
+    python studies/residual-value/residual_descriptives.py results/residual-study \
+        --out results/residual-study/descriptives.md
 """
 
 from __future__ import annotations
@@ -133,7 +134,7 @@ def tables(where: Path) -> str:
     runs = rule_study.read_runs(where / "runs")
     if not any(r["kind"] == "residual" and "corrections" in r for r in runs):
         raise ValueError("no residual run with its corrections")
-    lines = [f"`python scripts/residual_descriptives.py {where}`", ""]
+    lines = [f"`python studies/residual-value/residual_descriptives.py {where}`", ""]
     return "\n".join(lines + corrections_table(runs) + [""] + ladder_levels_table(runs)) + "\n"
 
 

@@ -12,8 +12,8 @@ CPU-seconds are the stack's training CPU time divided by its runs: what one run 
 with its seeds. Results go to ``STUDY/results.jsonl``, a row per evaluation; a variant and
 condition already in it is skipped, so the command resumes.
 
-    python scripts/schedule_study.py run STUDY [--conditions ...] [--variants ...]
-    python scripts/schedule_study.py figure STUDY docs/figures/schedule.png   # and the table
+    python studies/update-schedule/schedule_study.py run STUDY [--conditions ...] [--variants ...]
+    python studies/update-schedule/schedule_study.py figure STUDY docs/figures/schedule.png   # and the table
 """
 
 from __future__ import annotations

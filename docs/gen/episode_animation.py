@@ -5,7 +5,7 @@ The predators stalk by parallel navigation until the prey is within ``CHASE_WITH
 chase (the hierarchical predator's two modes, switched by a fixed distance instead of a
 network); the prey is ``FleeingPrey``. The env's seed fixes the start, so the episode repeats.
 
-    python scripts/episode_animation.py    # docs/figures/env-episode.gif (about 100 kB)
+    python docs/gen/episode_animation.py    # docs/figures/env-episode.gif (about 100 kB)
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from pursuit_bench.env.task import MODE_NAMES
 from pursuit_bench.io.files import atomic_write_bytes
 from pursuit_bench.rules.policies import AlwaysChase, AlwaysStalk, FleeingPrey
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ANIMATION = ROOT / "docs" / "figures" / "env-episode.gif"
 CONDITION, SEED = "2p-high-shared", 2
 #: A predator chases once the prey is this close (world units; the arena is 2 across).

@@ -4,7 +4,7 @@ effect, an episode effect shared by every member (the same episodes) and noise; 
 cell, seeded; then the aggregate's bootstrap interval in one simulated setting. Prints what
 docs/leaderboard.md quotes.
 
-    python scripts/score_coverage.py
+    python studies/coverage/score_coverage.py
 """
 
 from __future__ import annotations

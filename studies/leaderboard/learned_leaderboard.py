@@ -4,7 +4,7 @@ preset, 15,000 episodes, seed 0, and the agent modules that play them (``flat(co
 ``residual(condition=…)``: the run's predator of the condition it is asked to play). The shipped
 agents, which the hierarchical row plays, are one run of each condition too (the median seed).
 
-    python scripts/learned_leaderboard.py        # trains runs/leaderboard/<kind>-<condition>/
+    python studies/leaderboard/learned_leaderboard.py        # trains runs/leaderboard/<kind>-<condition>/
     pursuit-bench score scripts.learned_leaderboard:flat --role predator --conditions 1p-high,1p-low …
 
 The run folders are generated files (not in git): the command above makes them again, bit for bit

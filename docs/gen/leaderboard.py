@@ -6,8 +6,8 @@ this writes, byte for byte. A partial row (scored in fewer conditions than all o
 fewer episodes per member than the leaderboard's) is marked † and listed after the full ones,
 its shortfall said under the table: its aggregate is over less, and no row is ranked.
 
-    python scripts/leaderboard.py            # rewrite docs/leaderboard.md and pursuit_bench/benchmark/leaderboard.json
-    python scripts/leaderboard.py --check    # exit 1 if either is not up to date
+    python docs/gen/leaderboard.py            # rewrite docs/leaderboard.md and pursuit_bench/benchmark/leaderboard.json
+    python docs/gen/leaderboard.py --check    # exit 1 if either is not up to date
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Any
 from pursuit_bench.benchmark import score
 from pursuit_bench.io.files import atomic_write_text
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "results" / "score"
 PAGE = ROOT / "docs" / "leaderboard.md"
 BEGIN, END = "<!-- leaderboard:begin -->", "<!-- leaderboard:end -->"
@@ -35,7 +35,7 @@ def summary(results: Path = RESULTS) -> str:
     ``pursuit-bench score`` places a result among (:func:`pursuit_bench.benchmark.score.standing`)."""
     rows: list[dict[str, Any]] = json.loads((results / "rows.json").read_text())
     entries = [score.leaderboard_entry(row["who"], json.loads((results / row["file"]).read_text())) for row in rows]
-    about = "written by scripts/leaderboard.py from results/score/rows.json with docs/leaderboard.md"
+    about = "written by docs/gen/leaderboard.py from results/score/rows.json with docs/leaderboard.md"
     lines = ",\n".join(f"  {json.dumps(entry, ensure_ascii=False)}" for entry in entries)  # a row a line
     return f'{{\n "about": {json.dumps(about)},\n "rows": [\n{lines}\n ]\n}}\n'
 
