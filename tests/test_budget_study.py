@@ -233,7 +233,10 @@ def test_a_new_machine_trains_only_the_members_not_stored(tmp_path: Path) -> Non
     again = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     assert again.returncode == 0, again.stderr
     assert [p.name for p in (tmp_path / "b" / "on").glob("*/runs/*")] == ["3p-low-shared-flat-seed1006"]
-    assert "population-hierarchical-3p-low-shared: every member stored" in (tmp_path / "b" / "progress.log").read_text()
+    assert (
+        "population-hierarchical-3p-low-shared: every run's outcome is kept: not trained again"
+        in (tmp_path / "b" / "progress.log").read_text()
+    )
     written = sorted((tmp_path / "a" / "populations").rglob("*.*"))
     assert len(written) == 3 * 9
     for path in written:

@@ -6,10 +6,11 @@ import math
 import numpy as np
 import pytest
 import torch
+from reference.dqn_loss import double_dqn_targets
 
 from pursuit_bench.agents.adam import FlatAdam
 from pursuit_bench.agents.config import QUICK, AgentConfig
-from pursuit_bench.agents.dqn import DQNLearner, double_dqn_targets, wall_features
+from pursuit_bench.agents.dqn import DQNLearner, wall_features
 from pursuit_bench.agents.network import DuelingQNetwork
 from pursuit_bench.agents.replay import Batch
 

@@ -4,9 +4,13 @@ update the same bits alone as stacked beside others."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 import torch
+from reference import dqn_loss
 
 from pursuit_bench.agents.config import QUICK, REPRODUCTION, AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner
@@ -27,8 +31,8 @@ def random_batch(rng: np.random.Generator, members: int, size: int, n_obs: int, 
 
 
 def autograd_step(learner: DQNLearner, batch: Batch) -> np.ndarray:
-    """The reference: DQNLearner.loss, autograd's backward, the same Adam."""
-    losses, td = learner.loss(batch)
+    """The reference: tests/reference/dqn_loss.py's loss, autograd's backward, the same Adam."""
+    losses, td = dqn_loss.loss(learner, batch)
     learner.optimizer.zero_grad()
     losses.sum().backward()
     learner.optimizer.step()
@@ -197,3 +201,26 @@ def test_column_sums_add_each_column_in_the_order_of_a_loop_down_it() -> None:
     for i in reversed(range(64)):
         backwards += x[i]
     assert not np.array_equal(out, backwards)  # the data tell the orders apart: the test can see one
+
+
+@pytest.mark.slow
+def test_importing_the_kernels_leaves_the_threads_alone_and_a_learner_limits_scipys_blas() -> None:
+    """fused.py has no import side effect: SciPy's BLAS keeps its threads until a learner is made,
+    which gives it one (a process per core trains; more threads only wait on each other)."""
+    code = (
+        "import os\n"
+        "os.environ['OPENBLAS_NUM_THREADS'] = '2'\n"
+        "from pathlib import Path\n"
+        "from threadpoolctl import threadpool_info\n"
+        "import pursuit_bench.agents.fused\n"
+        "def scipys():\n"
+        "    return [i['num_threads'] for i in threadpool_info() if 'scipy' in Path(i['filepath']).parent.name]\n"
+        "before = scipys()\n"
+        "from pursuit_bench.agents.config import QUICK\n"
+        "from pursuit_bench.agents.dqn import DQNLearner\n"
+        "DQNLearner(4, 3, QUICK)\n"
+        "print(before, scipys())\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[2] [1]", done.stdout

@@ -1,17 +1,11 @@
-"""Prioritized replay against a naive reference."""
+"""Prioritized replay against a naive reference (tests/reference/prioritized_replay.py)."""
 
 import numpy as np
 import pytest
+from reference.prioritized_replay import CumulativeSumSampler, PrioritizedReplay, SumTreeSampler
 
 from pursuit_bench.agents.config import PAPER
-from pursuit_bench.agents.replay import (
-    CumulativeSumSampler,
-    PrioritizedReplay,
-    ReplayStack,
-    SumTreeSampler,
-    _tree_draw,
-    _tree_set,
-)
+from pursuit_bench.agents.replay import ReplayStack, _tree_draw, _tree_set
 
 SAMPLERS = ["flat", "tree"]
 

@@ -344,3 +344,31 @@ def test_a_checkpoint_without_the_arenas_still_resumes(tmp_path: Path) -> None:
     assert [json.loads(row)["episode"] for row in (out / "metrics.jsonl").read_text().splitlines()] == list(
         range(1, 11)
     )
+
+
+def test_a_folder_is_prepared_for_a_new_resumed_or_replaced_run_and_refuses_what_it_holds(tmp_path: Path) -> None:
+    """runs.prepare, the logic behind ``train --out/--resume/--force``, without the command line."""
+    from pursuit_bench.training.train_config import TrainConfig
+
+    config = TrainConfig(condition="1p-high", episodes=5)
+    out = tmp_path / "run"
+    out.mkdir()
+    assert runs.prepare(out, config, {}, resume=False, force=False) == (None, None)
+    assert runs.read_config(out)[0] == config
+    state, note = runs.prepare(out, config, {}, resume=True, force=False)
+    assert state is None and note == f"{out}: no checkpoint yet; starting the run from its beginning"
+    other = TrainConfig(condition="2p-low-shared", episodes=5)
+    assert runs.prepare(out, other, {}, resume=False, force=False) == (None, None)  # never checkpointed: free
+    (out / runs.CHECKPOINT).write_bytes(b"")  # a run that has trained (its checkpoint unread here)
+    with pytest.raises(runs.FolderRefused, match="already holds this run: pass --resume"):
+        runs.prepare(out, other, {}, resume=False, force=False)
+    with pytest.raises(runs.FolderRefused, match="already holds a different run"):
+        runs.prepare(out, config, {}, resume=False, force=False)
+    assert runs.prepare(out, config, {}, resume=False, force=True) == (None, None)
+    assert runs.read_config(out)[0] == config and not (out / runs.CHECKPOINT).exists()
+    stranger = tmp_path / "stranger"
+    stranger.mkdir()
+    (stranger / "notes.txt").write_text("mine\n")
+    with pytest.raises(runs.FolderRefused, match="holds no pursuit-bench run"):
+        runs.prepare(stranger, config, {}, resume=False, force=True)
+    assert (stranger / "notes.txt").read_text() == "mine\n"

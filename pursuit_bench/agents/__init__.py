@@ -27,7 +27,6 @@ if TYPE_CHECKING:
     )
     from pursuit_bench.agents.network import DuelingQNetwork
     from pursuit_bench.agents.registry import KINDS
-    from pursuit_bench.agents.replay import PrioritizedReplay
     from pursuit_bench.agents.residual import ResidualLearner, ResidualPredator
 
 __all__ = [
@@ -42,7 +41,6 @@ __all__ = [
     "HierarchicalPredator",
     "LearningAgent",
     "Prey",
-    "PrioritizedReplay",
     "ResidualLearner",
     "ResidualPredator",
     "ScriptedAgent",
@@ -59,7 +57,6 @@ _LAZY = {
     "ResidualPredator": "residual",
     "ScriptedAgent": "kinds",
     "DuelingQNetwork": "network",
-    "PrioritizedReplay": "replay",
 }
 
 
@@ -68,6 +65,11 @@ def _lazy(name: str) -> Any:
         value = getattr(importlib.import_module(f"pursuit_bench.agents.{_LAZY[name]}"), name)
         globals()[name] = value
         return value
+    if name == "PrioritizedReplay":
+        raise AttributeError(
+            "pursuit_bench.agents.PrioritizedReplay was a test reference, no learner's replay; it moved to the tests "
+            "(tests/reference/prioritized_replay.py) in 0.2: the learners' replay is agents.replay.ReplayStack"
+        )
     raise AttributeError(f"module 'pursuit_bench.agents' has no attribute {name!r}")
 
 

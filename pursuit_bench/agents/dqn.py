@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 
 from pursuit_bench.agents.adam import FlatAdam, flatten_parameters, parameter_offsets
 from pursuit_bench.agents.config import AgentConfig
@@ -23,6 +22,7 @@ from pursuit_bench.agents.fused import (
     act_kernel,
     choose_kernel,
     exploration_kernel,
+    one_thread_for_scipys_blas,
     q_and_value_kernel,
     replay_update_kernel,
     update_kernel,
@@ -61,26 +61,6 @@ def wall_features(obs: torch.Tensor) -> torch.Tensor:
     return torch.cat([obs, u, v], dim=-1)
 
 
-def double_dqn_targets(
-    online_next: torch.Tensor,
-    target: DuelingQNetwork,
-    rewards: torch.Tensor,
-    next_obs: torch.Tensor,
-    terminated: torch.Tensor,
-    gamma: float,
-) -> torch.Tensor:
-    """``y = r + γ (1 - terminated) Q_target(s', argmax_a Q_online(s', a))``, shapes (M, B);
-    ``online_next`` is ``Q_online(s', ·)`` (M, B, A).
-
-    Only termination cuts the bootstrap: a truncated transition (time limit) is stored with
-    ``terminated = 0`` and bootstraps from its real next observation.
-    """
-    with torch.no_grad():
-        best = online_next.argmax(dim=-1, keepdim=True)
-        next_value = target(next_obs).gather(-1, best).squeeze(-1)
-        return rewards + gamma * (1.0 - terminated) * next_value
-
-
 class DQNLearner:
     """M independent double-DQN learners. Arrays passed in and out have the member axis first.
 
@@ -95,6 +75,7 @@ class DQNLearner:
     ) -> None:
         if isinstance(n_actions, bool) or not isinstance(n_actions, (int, np.integer)) or n_actions < 1:
             raise ValueError(f"n_actions={n_actions!r}: expected an integer >= 1")
+        one_thread_for_scipys_blas()
         self.config, self.members, self.n_obs, self.n_actions = config, members, n_obs, n_actions
         seeds = member_seeds(seed, members)
         n_inputs = n_obs + (WALL_FEATURES if config.wall_features else 0)
@@ -282,7 +263,9 @@ class DQNLearner:
 
     def learn(self, batch: Batch) -> np.ndarray:
         """One gradient step on a batch with the member axis first (M, B, …), then its new
-        priorities: the gradient of :meth:`loss` summed over the members, from the compiled
+        priorities: the gradient of the Huber loss of the double-DQN targets, weighted by the
+        importance weights and summed over the members (the torch reference of
+        ``tests/reference/dqn_loss.py``, which the tests hold it to), from the compiled
         update of :mod:`pursuit_bench.agents.fused` (autograd's numbers to float rounding)."""
         self._checked(batch.obs, "batch.obs")
         self._checked(batch.next_obs, "batch.next_obs")
@@ -318,21 +301,6 @@ class DQNLearner:
         evaluations use that one, torch's, whose numbers the committed results hold)."""
         obs = self._checked(np.ascontiguousarray(obs, dtype=np.float32), "obs")
         return q_and_value_kernel(self._flat, self._offsets, self.n_actions, obs, self.config.wall_features)
-
-    def loss(self, batch: Batch) -> tuple[torch.Tensor, torch.Tensor]:
-        """Per-member losses (M,) and TD errors (M, B): the Huber loss of ``Q(s, a) - y``
-        weighted by the importance weights, averaged over the batch."""
-        obs, next_obs = self.encode(batch.obs), self.encode(batch.next_obs)
-        actions = torch.as_tensor(batch.actions, dtype=torch.int64)
-        rewards = torch.as_tensor(batch.rewards, dtype=torch.float32)
-        terminated = torch.as_tensor(batch.terminated, dtype=torch.float32)
-        weights = torch.as_tensor(batch.weights, dtype=torch.float32)
-        q = self.online(obs).gather(-1, actions.unsqueeze(-1)).squeeze(-1)
-        with torch.no_grad():
-            online_next = self.online(next_obs)
-        y = double_dqn_targets(online_next, self.target, rewards, next_obs, terminated, self.config.gamma)
-        per_sample = F.huber_loss(q, y, reduction="none", delta=self.config.huber_delta)
-        return (weights * per_sample).mean(dim=1), q - y
 
     def take(self, members: Sequence[int]) -> DQNLearner:
         """A learner of these members only (in this order), each with its parameters, target,

@@ -18,12 +18,13 @@ parameter ``i`` of member ``m`` is the block ``offsets[i] + m · size_i`` of ``s
 row-major ``(in, out)`` as :class:`~pursuit_bench.agents.network.StackedLinear` holds it.
 
 The arithmetic is autograd's, in another order: losses and gradients equal
-``DQNLearner.loss(batch).sum().backward()`` to float rounding, not bit for bit
+``loss(learner, batch).sum().backward()`` of ``tests/reference/dqn_loss.py`` to float rounding, not bit for bit
 (``tests/test_fused.py``); docs/departures.md says so.
 """
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numba
@@ -36,18 +37,19 @@ from pursuit_bench.agents.network import HEAD, TRUNK
 from pursuit_bench.agents.replay import draws_kernel, sample_kernel, update_priorities_kernel
 
 
-def _one_thread_for_scipys_blas() -> None:
+@functools.cache
+def one_thread_for_scipys_blas() -> None:
     """SciPy's OpenBLAS, which numba's np.dot calls, would split even these small products over
     every core: on a busy machine the threads wait on each other (measured: a member-update
     1.5-2x slower with two threads than with one). Training runs one process per core, so SciPy's
-    BLAS gets one thread in this process; numpy's own BLAS (a library of its own) is left alone."""
+    BLAS gets one thread in this process; numpy's own BLAS (a library of its own) is left alone.
+
+    Called by the learner (``DQNLearner``) as it is made, once per process: importing this module
+    changes nothing of the process's threads."""
     controller = ThreadpoolController()
     scipys = [lib.filepath for lib in controller.lib_controllers if "scipy" in Path(lib.filepath).parent.name]
     if scipys:
         controller.select(filepath=scipys).limit(limits=1)
-
-
-_one_thread_for_scipys_blas()
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -83,7 +85,7 @@ def _weights(flat, offsets, member, n_in, n_actions):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _inputs(obs, wall):
+def network_inputs(obs, wall):
     """What the network sees of observations (B, n_obs): a contiguous copy, with the wall features
     ``(u, v)`` appended when ``wall`` (:func:`pursuit_bench.agents.dqn.wall_features`)."""
     rows, n_obs = obs.shape
@@ -94,7 +96,7 @@ def _inputs(obs, wall):
 
 @numba.njit(cache=True, error_model="numpy")
 def _fill_inputs(obs, wall, out):
-    """:func:`_inputs` written into ``out`` (B, n_obs [+ 2])."""
+    """:func:`network_inputs` written into ``out`` (B, n_obs [+ 2])."""
     rows, n_obs = obs.shape
     out[:, :n_obs] = obs
     if wall:
@@ -109,7 +111,7 @@ def _fill_inputs(obs, wall, out):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _dense_relu(x, w, b):
+def dense_relu(x, w, b):
     """``relu(x @ w + b)``."""
     out = np.empty((x.shape[0], w.shape[1]), dtype=np.float32)
     _dense_relu_into(x, w, b, out)

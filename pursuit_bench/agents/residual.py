@@ -45,7 +45,7 @@ from torch import nn
 from pursuit_bench.agents.adam import adam_step_kernel
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.dqn import DECISIVE_GAP, DQNLearner, decision_scale
-from pursuit_bench.agents.fused import _dense_relu, _inputs, q_and_value_kernel
+from pursuit_bench.agents.fused import dense_relu, network_inputs, q_and_value_kernel
 from pursuit_bench.agents.kinds import HierarchicalPredator
 from pursuit_bench.agents.network import TRUNK, StackedLinear, member_seeds
 from pursuit_bench.env.task import N_DIRECTIONS
@@ -90,7 +90,7 @@ def _corrections_kernel(w1, b1, w2, b2, w3, b3, obs, wall):
     members, rows, _ = obs.shape
     out = np.empty((members, rows, w3.shape[2]), dtype=np.float32)
     for m in range(members):
-        hidden = _dense_relu(_dense_relu(_inputs(obs[m], wall), w1[m], b1[m, 0]), w2[m], b2[m, 0])
+        hidden = dense_relu(dense_relu(network_inputs(obs[m], wall), w1[m], b1[m, 0]), w2[m], b2[m, 0])
         out[m] = np.dot(hidden, w3[m])
         for i in range(rows):
             for j in range(w3.shape[2]):

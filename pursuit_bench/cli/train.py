@@ -80,39 +80,16 @@ def _resumed_config(
 
 
 def _prepare_folder(out: Path, config: TrainConfig, settings: dict[str, Any], resume: bool, force: bool) -> dict | None:
-    """Make ``out`` hold this run (its lock held); returns the checkpoint to resume from, or None."""
+    """:func:`~pursuit_bench.training.runs.prepare`, its refusals as the command's one-line errors."""
     from pursuit_bench.training import runs
 
-    if resume:
-        state = None
-        if (out / runs.CHECKPOINT).exists():
-            try:
-                state = runs.load_checkpoint(out)
-            except ValueError as error:
-                raise BadInput(f"cannot resume: {error}") from None
-            if state["episodes_done"] > config.episodes:
-                raise BadInput(
-                    f"--episodes {config.episodes}: {out} has already trained {state['episodes_done']} episodes; "
-                    "give at least that many"
-                )
-        else:
-            click.echo(f"{out}: no checkpoint yet; starting the run from its beginning", err=True)
-        runs.write_config(out, config, settings)
-        return state
-    if not runs.holds_only_unstarted_or_nothing(out):
-        if not runs.is_run(out):
-            raise BadInput(f"--out {out}: the folder is not empty and holds no pursuit-bench run; choose another")
-        if not force:
-            try:
-                saved, _ = runs.read_config(out)
-                same = saved == config
-            except ValueError:
-                same = False
-            what = "this run" if same else "a different run"
-            raise BadInput(f"--out {out} already holds {what}: pass --resume to continue it or --force to start over")
-    runs.clear(out)
-    runs.write_config(out, config, settings)
-    return None
+    try:
+        state, note = runs.prepare(out, config, settings, resume, force)
+    except runs.FolderRefused as refused:
+        raise BadInput(str(refused)) from None
+    if note:
+        click.echo(note, err=True)
+    return state
 
 
 def _describe(returns: dict[str, list[float]], captures: list[bool], epsilon: float) -> str:

@@ -34,14 +34,13 @@ import numpy as np
 
 from pursuit_bench import stats
 from pursuit_bench.env.conditions import CONDITIONS
+from pursuit_bench.reports.rule_study import FLEEING, KINDS, pooled
 from pursuit_bench.stats.text import p_text, span_text
 
 FORMAT = "pursuit-bench-pool-1"
-KINDS = ("hierarchical", "flat")
 #: The learned predator kinds a pool study compares, in the order of their comparisons: each kind
 #: minus every later one (residual − hierarchical, residual − flat, hierarchical − flat).
 ORDER = ("residual", "hierarchical", "flat")
-FLEEING = "FleeingPrey"
 EQUIVALENCE_MARGIN = stats.EQUIVALENCE_MARGIN
 VERDICTS = ("rule helps", "flat better", "equivalent", "not resolved")
 
@@ -221,12 +220,6 @@ def load(path: Path) -> dict[str, Any]:
 
 
 # --- the judgement -------------------------------------------------------------------------------
-
-
-def pooled(evaluations: dict[str, Any], predator: str) -> dict[str, float]:
-    """One predator's pool return and margin from its evaluations against each opponent."""
-    variants = np.mean([e["panels"][predator] for e in evaluations.values()], axis=0)
-    return {"return": float(variants[0]), "margin": float(variants[0] - max(variants[1], variants[2]))}
 
 
 def _panels(result: dict[str, Any]) -> list[tuple[str, str]]:

@@ -167,6 +167,52 @@ def recordings(folder: Path) -> list[Path]:
     return pieces + sorted(folder.glob("eval*.rrd"))
 
 
+class FolderRefused(ValueError):
+    """A run folder that cannot take the run asked for (:func:`prepare`); the message is one line
+    for the user."""
+
+
+def prepare(
+    out: Path, config: TrainConfig, settings: dict[str, Any], resume: bool, force: bool
+) -> tuple[dict[str, Any] | None, str | None]:
+    """Make ``out`` hold this run (its lock held by the caller): resumed (``resume``: the checkpoint
+    to go on from, or None where there is none yet), started over (``force``), or new; returns the
+    checkpoint to resume from, or None, and a note for the user. Raises :class:`FolderRefused`
+    where ``out`` holds something else, or a run that ``resume``/``force`` were not asked for."""
+    if resume:
+        state, note = None, None
+        if (out / CHECKPOINT).exists():
+            try:
+                state = load_checkpoint(out)
+            except ValueError as error:
+                raise FolderRefused(f"cannot resume: {error}") from None
+            if state["episodes_done"] > config.episodes:
+                raise FolderRefused(
+                    f"--episodes {config.episodes}: {out} has already trained {state['episodes_done']} episodes; "
+                    "give at least that many"
+                )
+        else:
+            note = f"{out}: no checkpoint yet; starting the run from its beginning"
+        write_config(out, config, settings)
+        return state, note
+    if not holds_only_unstarted_or_nothing(out):
+        if not is_run(out):
+            raise FolderRefused(f"--out {out}: the folder is not empty and holds no pursuit-bench run; choose another")
+        if not force:
+            try:
+                saved, _ = read_config(out)
+                same = saved == config
+            except ValueError:
+                same = False
+            what = "this run" if same else "a different run"
+            raise FolderRefused(
+                f"--out {out} already holds {what}: pass --resume to continue it or --force to start over"
+            )
+    clear(out)
+    write_config(out, config, settings)
+    return None, None
+
+
 def clear(folder: Path) -> None:
     """Remove a run's own files (and only those) so that a fresh run can start there."""
     for name in RUN_FILES:
