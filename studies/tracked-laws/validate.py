@@ -1,7 +1,8 @@
 """Validation of ``law --tracks`` on tracks with a known answer (issue 66): synthetic pursuers
-following each law (``study/synthetic_attacks.py``) against a weaving target, written as
+following each law (``laws/synthetic_attacks.py``) against a weaving target, written as
 movement poses datasets the way a tracker would give them (30 Hz, Gaussian tracking noise on
-both animals, and in half the attacks a gap of 0.2 s where the tracker lost both), read back and
+both animals, and a gap of 0.2 s where the tracker lost both in the attacks flagged for one
+(half) that last over 2 s: 16 of the 50), read back and
 fitted by ``pursuit-bench law --tracks``'s own path (``tracked_laws.fit_tracks``, which resamples
 to 10 Hz and splits at gaps). The confusion matrix counts each piece's chosen law against the
 true one.
