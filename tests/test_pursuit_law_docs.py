@@ -1,7 +1,6 @@
 """docs/pursuit-law.md against its sources: every table in it is what docs/gen/law_tables.py prints
 from results/pursuit-law/, and those files are what the code gives (a few selections redone)."""
 
-import importlib.util
 import json
 import re
 from pathlib import Path
@@ -61,10 +60,7 @@ def test_the_doc_holds_every_table_as_its_script_prints_it(tables: dict[str, str
 def test_every_table_of_the_doc_is_generated_but_the_laws(tables: dict[str, str]) -> None:
     """No hand-typed table: each one is a generated table (docs/gen/law_tables.py's, or the tracked
     laws' confusion matrix from studies/tracked-laws/validation.json), or the method's list of laws."""
-    spec = importlib.util.spec_from_file_location("tracked_validate", ROOT / "studies" / "tracked-laws" / "validate.py")
-    assert spec is not None and spec.loader is not None
-    validate = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(validate)
+    validate = load_script("studies/tracked-laws/validate.py")
     tracked = json.loads((ROOT / "studies" / "tracked-laws" / "validation.json").read_text())["confusion"]
     generated = [*tables.values(), validate.confusion_table(tracked)]
     for table in _doc_tables(DOC.read_text()):
