@@ -344,6 +344,8 @@ def tutorial_skip(page: Path) -> str | None:
     text = page.read_text()
     if "stable_baselines3" in text and importlib.util.find_spec("stable_baselines3") is None:
         return "Stable-Baselines3 is not installed (pip install stable-baselines3; the test extra brings it)"
+    if "pursuit-bench marl" in text and importlib.util.find_spec("benchmarl") is None:
+        return "BenchMARL is not installed (the marl extra: pip install -e '.[marl]'; the test extra brings it)"
     if "from movement" in text and importlib.util.find_spec("movement") is None:
         return "movement is not installed (the animals extra: pip install -e '.[animals]'; the test extra brings it)"
     if "--backend ray" in text:

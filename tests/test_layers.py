@@ -1,4 +1,4 @@
-"""The folders are the layers: io, stats ← env ← rules ← agents ← trajectories ← training ← pretrained
+"""The folders are the layers: io, stats ← env ← rules ← agents ← trajectories ← training ← marl ← pretrained
 ← benchmark ← laws ← figures ← analysis ← reports ← cli (docs/layout.md).
 Every import in the package (function-local ones too) is read from the source; one that runs
 upward fails, as does a cycle between modules."""
@@ -10,8 +10,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "pursuit_bench"
 LAYERS = (
-    "io", "stats", "env", "rules", "agents", "trajectories", "training", "pretrained", "benchmark", "laws", "figures",
-    "analysis", "reports", "cli",
+    "io", "stats", "env", "rules", "agents", "trajectories", "training", "marl", "pretrained", "benchmark", "laws",
+    "figures", "analysis", "reports", "cli",
 )  # fmt: skip
 #: The ground floor: layers that import nothing of pursuit-bench but themselves.
 GROUND = ("io", "stats")

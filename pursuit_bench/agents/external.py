@@ -11,7 +11,8 @@ The agent protocol: an object with
   for a predator or (B,) for the prey; used instead of ``act`` when present (faster).
 
 The factory, ``MODULE:FACTORY``, is a callable taking no argument that returns such an object.
-A Stable-Baselines3 model needs none: ``NAME=MODEL.zip`` loads its policy (``sb3_model.py``).
+A Stable-Baselines3 model needs none: ``NAME=MODEL.zip`` loads its policy (``sb3_model.py``);
+nor does a team file: ``NAME=TEAM.safetensors`` plays the team's agent of NAME's slot (``team_file.py``).
 An external agent acts as it is: the ε = 0.1 the paper gives a learned prey during evaluation is
 applied to our own agents only.
 """
@@ -26,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from pursuit_bench.agents import sb3_model
+from pursuit_bench.agents import sb3_model, team_file
 
 
 def load_factory(spec: str) -> Callable[[], Any]:
@@ -111,6 +112,12 @@ def replaced(agents: dict[str, Any], specs: dict[str, str]) -> dict[str, Any]:
         raise ValueError(f"--agent {unknown[0]}=…: no such agent here; expected one of {', '.join(names)}")
     out = dict(agents)
     for name, spec in specs.items():
+        predator = name != names[-1]
+        if team_file.is_team_path(spec):
+            out[name] = ExternalAgent(
+                name, team_member(spec, names.index(name) if predator else 0, predator), spec, predator
+            )
+            continue
         factory = load_factory(spec)
         try:
             made = factory()
@@ -118,5 +125,14 @@ def replaced(agents: dict[str, Any], specs: dict[str, str]) -> dict[str, Any]:
             raise ValueError(f"--agent {name}={spec}: the factory raised {type(error).__name__}: {error}") from None
         if isinstance(made, sb3_model.SB3Policy):
             made.check_role(predator=name != names[-1])
-        out[name] = ExternalAgent(name, made, spec, predator=name != names[-1])
+        out[name] = ExternalAgent(name, made, spec, predator=predator)
     return out
+
+
+def team_member(spec: str, slot: int, predator: bool) -> team_file.TeamMember:
+    """The agent of a team file that plays ``slot`` of its role; ValueError if the file's role is the other."""
+    team = team_file.Team(spec)
+    role = "predator" if predator else "prey"
+    if team.role != role:
+        raise ValueError(f"{spec}: a {team.role} team; it cannot play the {role}")
+    return team.member(slot)

@@ -31,7 +31,7 @@ import numpy as np
 from scipy import stats
 
 from pursuit_bench import pretrained
-from pursuit_bench.agents import external, sb3_model
+from pursuit_bench.agents import external, sb3_model, team_file
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.benchmark import populations
 from pursuit_bench.env.conditions import CONDITIONS
@@ -206,6 +206,8 @@ def resolve(spec: str, role: str) -> Contestant:
         )
     if sb3_model.is_model_path(spec):
         return _sb3(spec, role)
+    if team_file.is_team_path(spec):
+        return _team(spec, role)
     folder = Path(spec)
     if (folder / "config.json").is_file():
         return _run_folder(folder, role)
@@ -279,6 +281,33 @@ def _sb3(spec: str, role: str) -> Contestant:
 
     return Contestant(
         spec, f"{spec} (a Stable-Baselines3 model)", role, make, can_play=can_play, observes=policy.observes
+    )
+
+
+def _team(spec: str, role: str) -> Contestant:
+    """A team file (``agents/team_file.py``: a MARL library's trained agents): its agent of each
+    slot, in the conditions with as many agents as the one it was trained in."""
+    team = team_file.Team(spec)
+    external.team_member(spec, 0, predator=role == "predator")  # its role is the one asked for
+    if team.condition not in CONDITIONS or len(slots(team.condition, role)) != len(team.agents):
+        raise ValueError(
+            f"{spec}: trained in {team.condition!r} with {len(team.agents)} {role}(s); not a condition here"
+        )
+
+    def make(condition: str, seed: int) -> dict[str, Any]:
+        return {
+            name: external.ExternalAgent(name, team.member(i), spec, predator=role == "predator")
+            for i, name in enumerate(slots(condition, role))
+        }
+
+    return Contestant(
+        spec,
+        team.describe(),
+        role,
+        make,
+        can_play=_team_size_matches(team.condition),
+        copies=False,
+        trained_in=team.condition,
     )
 
 

@@ -17,6 +17,7 @@ import click
 from pursuit_bench.cli.analyze import analyze
 from pursuit_bench.cli.evaluate import evaluate
 from pursuit_bench.cli.law import law
+from pursuit_bench.cli.marl import marl
 from pursuit_bench.cli.pool import pool
 from pursuit_bench.cli.report import report
 from pursuit_bench.cli.robust import robust
@@ -53,7 +54,7 @@ def main() -> None:
     """pursuit-bench: predators hunt a prey; deep RL picks how hard, parallel navigation where."""
 
 
-for command in (conditions, train, evaluate, sweep, report, pool, analyze, law, robust, score, view):
+for command in (conditions, train, evaluate, sweep, report, pool, analyze, law, robust, score, marl, view):
     main.add_command(command)
 
 
