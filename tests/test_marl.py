@@ -145,6 +145,9 @@ def test_every_condition_is_a_benchmarl_task() -> None:
     assert task.action_spec(env)["predator", "action"].space.n == 24
     rollout = env.rollout(3)
     assert rollout["next", "predator", "reward"].shape == (3, 3, 1)
+    make = task.get_env_fun(3, False, 0, "cpu")  # as BenchMARL builds its training envs: one function, many envs
+    starts = [make().reset()["state"] for _ in range(3)]
+    assert not torch.equal(starts[0], starts[1]) and not torch.equal(starts[1], starts[2])
 
 
 @pytest.mark.slow
@@ -160,9 +163,15 @@ def test_marl_train_writes_teams_that_act_as_benchmarl_s_policies_and_resumes(tm
     summary = json.loads((out / "marl.json").read_text())
     assert summary["export_disagreements"] == {"predator": 0, "prey": 0} and summary["frames"] == 200
     assert team_file.Team(out / "predator.safetensors").header["algorithm"] == "iql"
-    again = subprocess.run(command, capture_output=True, text=True, timeout=600)  # resumed: nothing left to do
+    again = subprocess.run(command, capture_output=True, text=True, timeout=600)  # finished: nothing to do
     assert again.returncode == 0, again.stderr[-2000:]
-    assert json.loads((out / "marl.json").read_text())["frames"] == 200
+    assert json.loads((out / "marl.json").read_text()) == summary
+    assert len(list((out / "benchmarl").iterdir())) == 1  # no second experiment was started
+    (out / "marl.json").unlink()  # as if stopped after its last checkpoint: resumed from it, not from scratch
+    resumed = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr[-2000:]
+    assert len(list((out / "benchmarl").iterdir())) == 1
+    assert json.loads((out / "marl.json").read_text())["export_disagreements"] == {"predator": 0, "prey": 0}
     other = subprocess.run(
         [*command[:-6], "--algorithm", "ippo", *command[-6:]], capture_output=True, text=True, timeout=600
     )
@@ -172,7 +181,13 @@ def test_marl_train_writes_teams_that_act_as_benchmarl_s_policies_and_resumes(tm
 def test_marl_train_refuses_a_setting_it_owns_or_does_not_know(tmp_path: Path) -> None:
     pytest.importorskip("benchmarl", reason="the marl extra is not installed (pip install -e '.[marl]')")
     base = ["marl", "train", "--algorithm", "ippo", "--condition", "1p-high", "--frames", "10", "--out", str(tmp_path)]
-    for setting, said in (("max_n_frames=5", "not an experiment setting"), ("lr=fast", "expected a float"),
-                          ("nothing", "expected KEY=VALUE"), ("no_such=1", "not an experiment setting")):  # fmt: skip
+    refused = {
+        "max_n_frames=5": "not an experiment setting",
+        "lr=fast": "expected a value of type float",
+        "nothing": "expected KEY=VALUE",
+        "adam_extra_kwargs=x": "a dict setting",
+        "no_such=1": "not an experiment setting",
+    }
+    for setting, said in refused.items():
         code, out = run_cli(*base, "--set", setting)
         assert code == 2 and said in out and "Traceback" not in out, out

@@ -69,6 +69,8 @@ def train(algorithm: str, condition: str, frames: int, seed: int, settings: tupl
     try:
         with SignalCatcher(raise_at_once=True).active():
             summary = marl_train.train(run, out)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
     except Stopped as stop:
         click.echo(f"stopped ({stop}): rerun the same command to resume from the last checkpoint in {out}", err=True)
         raise SystemExit(stop.exit_code) from None

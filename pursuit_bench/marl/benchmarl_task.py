@@ -16,6 +16,7 @@ the centralised critics (MAPPO) and mixers (QMIX) read. Episodes end for all at 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from typing import Any
 
@@ -28,6 +29,9 @@ from pursuit_bench.env.joint_actions import JointActionParallelEnv
 from pursuit_bench.env.pettingzoo_env import parallel_env
 
 PREFIX = "PURSUIT_"
+#: Env ``i`` made by a task of experiment seed ``s`` is seeded ``SEED_STRIDE * s + i``: distinct
+#: across the envs of a run and across the seeds of a study (up to this many envs a run).
+SEED_STRIDE = 1000
 
 
 def task_name(condition: str) -> str:
@@ -69,7 +73,12 @@ class PursuitTaskClass(TaskClass):
         self, num_envs: int, continuous_actions: bool, seed: int | None, device: Any
     ) -> Callable[[], EnvBase]:
         condition, options = condition_of(self.name), dict(self.config)
-        return lambda: make_env(condition, seed, device, **options)
+        made = itertools.count()  # BenchMARL builds its num_envs training envs from this one function
+
+        def one() -> EnvBase:  # each env its own seed: one seed for all gave every env the same starts
+            return make_env(condition, None if seed is None else SEED_STRIDE * seed + next(made), device, **options)
+
+        return one
 
     def supports_continuous_actions(self) -> bool:
         return False

@@ -42,7 +42,8 @@ CHECK_ROWS = 4096
 #: Settings ``marl train`` owns (the budget, logging, where and how often it saves).
 RESERVED = frozenset(
     {"max_n_frames", "max_n_iters", "loggers", "render", "save_folder", "restore_file", "checkpoint_interval",
-     "checkpoint_at_end", "keep_checkpoints_num", "sampling_device", "train_device", "buffer_device"}
+     "checkpoint_at_end", "keep_checkpoints_num", "sampling_device", "train_device", "buffer_device",
+     "restore_map_location"}
 )  # fmt: skip
 
 
@@ -53,6 +54,8 @@ def _settable() -> str:
 
 def _typed(key: str, value: str, default: Any) -> Any:
     """``value`` as the type of the setting's default; ValueError in one line if it is not one."""
+    if isinstance(default, (dict, list, tuple)):
+        raise ValueError(f"--set {key}=…: a {type(default).__name__} setting; only numbers, flags and words here")
     try:
         if isinstance(default, bool):
             if value.lower() not in ("true", "false"):
@@ -64,7 +67,9 @@ def _typed(key: str, value: str, default: Any) -> Any:
             return float(value) if default is not None or value.lower() != "null" else None
         return value
     except ValueError:
-        raise ValueError(f"--set {key}={value}: expected a {type(default).__name__} like {default!r}") from None
+        raise ValueError(
+            f"--set {key}={value}: expected a value of type {type(default).__name__} like {default!r}"
+        ) from None
 
 
 @dataclass(frozen=True)
@@ -116,7 +121,7 @@ def experiment_config(run: MarlRun, folder: Path) -> ExperimentConfig:
     config.evaluation_interval = batch * max(1, config.evaluation_interval // batch)
     config.loggers = ["csv"]
     config.render = False
-    config.save_folder = str(folder)
+    config.save_folder = str(folder.resolve())  # pickled by BenchMARL: a resume from elsewhere finds it
     config.checkpoint_interval = batch * CHECKPOINT_EVERY
     config.checkpoint_at_end = True
     config.keep_checkpoints_num = 2  # the one before the newest, should a stop cut the newest off
@@ -125,9 +130,9 @@ def experiment_config(run: MarlRun, folder: Path) -> ExperimentConfig:
 
 class OneThread(Callback):
     """Keeps torch on one thread through the run. TorchRL's batched envs set the thread count back
-    to the one torch had when torchrl was imported whenever one closes (BenchMARL closes its test
-    env after evaluating): on two busy cores, two threads made every op of the update 15× slower
-    (measured: tanh of 400 × 2 × 256 took 7.7 ms, 0.43 ms on one thread)."""
+    to the one torch had when torchrl was imported when one closes (``BatchedEnvBase.close``):
+    measured, the count was 2 after the first collection, and on two busy cores two threads made
+    every op of the update 15× slower (tanh of 400 × 2 × 256 took 7.7 ms, 0.43 ms on one thread)."""
 
     def on_setup(self) -> None:
         torch.set_num_threads(1)
@@ -171,7 +176,7 @@ def experiment(run: MarlRun, folder: Path) -> Experiment:
     torch.set_num_threads(1)  # networks this small run fastest on one thread (and OneThread keeps it so)
     checkpoint = last_checkpoint(folder)
     if checkpoint is not None:
-        return Experiment.reload_from_file(str(checkpoint))
+        return Experiment.reload_from_file(str(checkpoint), experiment_patch={"save_folder": str(folder.resolve())})
     task = getattr(PursuitTask, task_name(run.condition)).get_task(config={})
     return Experiment(
         task=task,
@@ -239,18 +244,27 @@ def export(experiment: Experiment, run: MarlRun, folder: Path) -> dict[str, int]
 
 def train(run: MarlRun, folder: Path) -> dict[str, Any]:
     """Train (or resume) ``run`` in ``folder``, write its team files and ``marl.json``; returns
-    what ``marl.json`` holds."""
+    what ``marl.json`` holds. A finished run (its ``marl.json`` there) is not touched again.
+    ValueError, and no team files, if a team file does not act as BenchMARL's policy does."""
     check_folder(run, folder)
-    (folder / "benchmarl").mkdir(parents=True, exist_ok=True)
+    if (folder / "marl.json").is_file():
+        done: dict[str, Any] = json.loads((folder / "marl.json").read_text())
+        return done
+    folder.mkdir(parents=True, exist_ok=True)
     stored = asdict(run) | {"settings": [list(pair) for pair in run.settings]}
     atomic_write_text(folder / "run.json", json.dumps(stored) + "\n")
+    (folder / "benchmarl").mkdir(exist_ok=True)
     started = time.process_time()
     made = experiment(run, folder / "benchmarl")
-    try:
-        made.run()
-        disagreements = export(made, run, folder)
-    finally:
-        made.close()
+    made.run()  # closes the experiment's envs itself, however it ends
+    disagreements = export(made, run, folder)
+    if any(disagreements.values()):
+        for group in made.group_map:
+            (folder / f"{group}.safetensors").unlink(missing_ok=True)
+        raise ValueError(
+            f"{folder}: the exported teams do not act as BenchMARL's policies ({disagreements} of "
+            f"{CHECK_ROWS} observations differ): not written; a model other than BenchMARL's MlpConfig?"
+        )
     summary = {
         "run": asdict(run),
         "library": {name: version(name) for name in ("benchmarl", "torchrl", "tensordict", "torch")},

@@ -68,6 +68,9 @@ def main() -> None:
     signal.signal(signal.SIGINT, stop)
     cli = [sys.executable, "-m", "pursuit_bench.cli.main"]
     for condition, algorithm, seed in RUNS:
+        if stopping:
+            log(args.work, "stopped; rerun to resume")
+            return
         name = f"{condition}-{algorithm}-seed{seed}"
         result = args.results / f"{name}.score.json"
         if result.exists():
@@ -78,14 +81,14 @@ def main() -> None:
         code = run([*cli, *train, "--frames", str(FRAMES[condition]), "--seed", str(seed), "--out", str(folder)])
         if stopping or code != 0:
             log(args.work, f"{name}: {'stopped' if stopping else f'failed ({code})'}; rerun to resume")
-            return
+            sys.exit(0 if stopping else 1)
         scored = args.work / "scores" / name
         shutil.rmtree(scored, ignore_errors=True)
         team = str(folder / "predator.safetensors")
         code = run([*cli, "score", team, "--role", "predator", "--conditions", condition, *SCORE, "--out", str(scored)])
         if stopping or code != 0:
             log(args.work, f"{name}: scoring {'stopped' if stopping else f'failed ({code})'}; rerun to resume")
-            return
+            sys.exit(0 if stopping else 1)
         partial = result.with_suffix(".partial")
         shutil.copyfile(scored / "score.json", partial)
         partial.replace(result)
