@@ -106,6 +106,14 @@ def test_a_team_file_is_refused_in_one_line_when_it_is_not_one(tmp_path: Path) -
     save_file({"w": torch.zeros(2)}, str(tmp_path / "other.safetensors"), metadata={"format": "something else"})
     with pytest.raises(ValueError, match="not a pursuit-bench team file"):
         team_file.Team(tmp_path / "other.safetensors")
+    header = {"format": team_file.FORMAT, "role": "prey", "activation": "tanh"}
+    save_file({"w": torch.zeros(2)}, str(tmp_path / "no-agents.safetensors"), metadata=header)
+    with pytest.raises(ValueError, match="names its agents"):
+        team_file.Team(tmp_path / "no-agents.safetensors")
+    no_bias = {"prey_0.0.weight": torch.zeros(12, 10)}
+    save_file(no_bias, str(tmp_path / "no-bias.safetensors"), metadata=header | {"agents": '["prey_0"]'})
+    with pytest.raises(ValueError, match="with its bias"):
+        team_file.Team(tmp_path / "no-bias.safetensors")
 
 
 def test_eval_and_score_play_a_team_file_in_its_slots_and_refuse_the_other_role(tmp_path: Path) -> None:

@@ -104,13 +104,21 @@ class Team:
             raise ValueError(
                 f"{self.path}: a team file needs role predator/prey and activation {'/'.join(ACTIVATIONS)}"
             )
-        self.agents: list[str] = json.loads(header["agents"])
+        try:
+            self.agents: list[str] = json.loads(header["agents"])
+            if not isinstance(self.agents, list) or not self.agents:
+                raise ValueError
+        except (KeyError, ValueError):
+            raise ValueError(f"{self.path}: a team file's header names its agents (a JSON list)") from None
         self.layers: dict[str, list[tuple[torch.Tensor, torch.Tensor]]] = {}
         for agent in self.agents:
             stack: list[tuple[torch.Tensor, torch.Tensor]] = []
             while f"{agent}.{len(stack)}.weight" in tensors:
                 k = len(stack)
-                stack.append((tensors[f"{agent}.{k}.weight"], tensors[f"{agent}.{k}.bias"]))
+                weight, bias = tensors[f"{agent}.{k}.weight"], tensors.get(f"{agent}.{k}.bias")
+                if bias is None or weight.dim() != 2 or bias.shape != (weight.shape[0],):
+                    raise ValueError(f"{self.path}: {agent}'s layer {k} is not a (out, in) weight with its bias (out,)")
+                stack.append((weight, bias))
             if not stack:
                 raise ValueError(f"{self.path}: no layers for {agent}")
             self.layers[agent] = stack
