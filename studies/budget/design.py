@@ -176,9 +176,11 @@ def population_name(budget: int) -> str:
 
 def committed_member(condition: str, member: str, root: Path | None = None) -> Path:
     """The committed prey of a rule-study member (its 15,000-episode weights)."""
-    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+    import pursuit_bench
+
+    if (Path(pursuit_bench.__file__).parent / "benchmark").is_dir():  # 0.2's paths; else the pinned build's
         from pursuit_bench.benchmark import populations
-    except ImportError:
+    else:
         from pursuit_bench.pretrained import populations
 
     base = root if root is not None else populations.FOLDER

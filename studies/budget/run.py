@@ -197,15 +197,25 @@ def population_check(work: Path, condition: str, kind: str, run: Path, committed
     log(work, f"{run.name}: prey at its first part's end equals the committed {condition}/{member} to the bit")
 
 
+def redesigned() -> bool:
+    """Whether the ``pursuit_bench`` imported is 0.2's (rooms ``reports/``, ``benchmark/``) rather
+    than the pinned build's. Asked of the package's own folder, not by trying an import: with the
+    build first on the path, an editable install of a later checkout still answers for modules
+    the build lacks, and mixed a later ``reports.rule_study`` with the build's training code."""
+    import pursuit_bench
+
+    return (Path(pursuit_bench.__file__).parent / "reports").is_dir()
+
+
 def replay_check(args: Any, condition: str, run: Path) -> None:
     """SystemExit unless a judged run's first part, played at its end against the rule study's
     population by the rule study's evaluation, gives the rule study's committed result for that
     budget bit for bit (every member, every variant). What it played is kept in ``--work/replay/``."""
     import gzip
 
-    try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+    if redesigned():  # this checkout's module paths; else the pinned build's (before 0.2's redesign)
         from pursuit_bench.reports import rule_study
-    except ImportError:
+    else:
         from pursuit_bench.study import rule_study
 
     from pursuit_bench.io.files import atomic_write_text
@@ -528,9 +538,9 @@ def main() -> int:
         print(f"--judged-seeds {args.judged_seeds}: expected {design.MIN_CUT_SEEDS} to 10", file=sys.stderr)
         return 2
     if args.rule_population is None:
-        try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
+        if redesigned():  # this checkout's module paths; else the pinned build's (before 0.2's redesign)
             from pursuit_bench.benchmark import populations
-        except ImportError:
+        else:
             from pursuit_bench.pretrained import populations
 
         args.rule_population = populations.FOLDER / design.RULE_POPULATION
