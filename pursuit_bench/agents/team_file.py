@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 import torch
-from safetensors import SafetensorError, safe_open
 from safetensors.torch import save
 
+from pursuit_bench.agents import weights_file
 from pursuit_bench.env.joint_actions import N_JOINT, split
 from pursuit_bench.env.task import N_DIRECTIONS
 from pursuit_bench.io.files import atomic_write_bytes
@@ -88,14 +88,7 @@ class Team:
         self.path = Path(path)
         if not self.path.is_file():
             raise ValueError(f"{self.path}: no such team file")
-        try:
-            with safe_open(str(self.path), framework="pt") as file:
-                header = dict(file.metadata() or {})
-                tensors = {name: file.get_tensor(name) for name in file.keys()}
-        except (SafetensorError, OSError) as error:
-            raise ValueError(f"{self.path}: not a readable safetensors file ({error})") from None
-        if header.get("format") != FORMAT:
-            raise ValueError(f"{self.path}: not a pursuit-bench team file (format {FORMAT!r} expected)")
+        tensors, header = weights_file.read(self.path, FORMAT, "pursuit-bench team file")
         self.header = header
         self.role = header.get("role", "")
         self.activation = header.get("activation", "")

@@ -288,7 +288,8 @@ def _team(spec: str, role: str) -> Contestant:
     """A team file (``agents/team_file.py``: a MARL library's trained agents): its agent of each
     slot, in the conditions with as many agents as the one it was trained in."""
     team = team_file.Team(spec)
-    external.team_member(spec, 0, predator=role == "predator")  # its role is the one asked for
+    if team.role != role:
+        raise ValueError(f"{spec}: a {team.role} team; it cannot play the {role}")
     if team.condition not in CONDITIONS or len(slots(team.condition, role)) != len(team.agents):
         raise ValueError(
             f"{spec}: trained in {team.condition!r} with {len(team.agents)} {role}(s); not a condition here"

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 import torch
-from safetensors import SafetensorError, safe_open
 from safetensors.torch import save
 
+from pursuit_bench.agents import weights_file
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.task import obs_size
@@ -47,15 +47,7 @@ def _condition_folder(condition: str, folder: Path | None) -> Path:
 
 def read(path: Path) -> tuple[dict[str, torch.Tensor], dict[str, str]]:
     """One agent's file: (weights by parameter name, header). ``ValueError`` if it is not one."""
-    try:
-        with safe_open(str(path), framework="pt") as file:
-            header = dict(file.metadata() or {})
-            weights = {name: file.get_tensor(name) for name in file.keys()}
-    except (SafetensorError, OSError) as error:
-        raise ValueError(f"{path}: not a readable safetensors file ({error})") from None
-    if header.get("format") != FORMAT:
-        raise ValueError(f"{path}: not a pursuit-bench trained agent (format {FORMAT!r} expected)")
-    return weights, header
+    return weights_file.read(path, FORMAT, "pursuit-bench trained agent")
 
 
 def info(condition: str, *, folder: Path | None = None) -> dict[str, Any]:
