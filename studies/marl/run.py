@@ -1,7 +1,9 @@
 """The leaderboard's BenchMARL rows (issue 65, PLAN.md): IPPO, MAPPO and IQL as predators in
 1p-high, 2p-low-shared and 3p-high-individual, seeds 0–2, each trained for FRAMES[condition] env
 steps by ``pursuit-bench marl train`` (the library's defaults, its in-training evaluation off) and
-scored as every row is (``score --episodes 20 --seed 12345`` against the rule-study population).
+scored as every row is (``score --episodes 20 --seed 12345`` against the rule-study population);
+first, the rows they are compared with: our flat DQN and hierarchical predator in the same
+conditions and seeds, 15,000 episodes of the reproduction preset (``pursuit-bench train``).
 
     nohup python studies/marl/run.py --work /work/marl-study --results results/marl > marl.out 2>&1 &
 
@@ -27,8 +29,14 @@ ALGORITHMS = ("ippo", "mappo", "iql")
 #: reproduction preset (seed 0; PLAN.md), rounded up to whole BenchMARL batches of 6000.
 FRAMES = {"2p-low-shared": 258_000, "3p-high-individual": 972_000, "1p-high": 3_804_000}
 SEEDS = (0, 1, 2)
-#: Cheapest condition first, so that every algorithm has rows early.
-RUNS = [(c, a, s) for c in FRAMES for s in SEEDS for a in ALGORITHMS]
+#: Our learners, the comparison (PLAN.md): ``pursuit-bench train --predator KIND``.
+OURS = ("flat", "hierarchical")
+EPISODES = 15_000
+#: Ours first (about half a core-hour in all), then BenchMARL's; cheapest condition first, so that
+#: every algorithm has rows early.
+RUNS = [(c, k, s) for c in FRAMES for s in SEEDS for k in OURS] + [
+    (c, a, s) for c in FRAMES for s in SEEDS for a in ALGORITHMS
+]
 SCORE = ("--episodes", "20", "--seed", "12345")
 
 stopping: list[int] = []
@@ -48,8 +56,10 @@ def stop(signum: int, frame: Any) -> None:
         process.send_signal(signal.SIGTERM)
 
 
-def run(command: list[str]) -> int:
-    process = subprocess.Popen(command)
+def run(command: list[str], quiet: bool = False) -> int:
+    """``command``'s exit status; SIGTERM passed on to it (:func:`stop`). ``quiet``: its stdout
+    (``train``'s progress line, redrawn many times a second) goes nowhere."""
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL if quiet else None)
     child[:] = [process]
     try:
         return process.wait()
@@ -76,15 +86,24 @@ def main() -> None:
         if result.exists():
             continue
         folder = args.work / "runs" / name
-        log(args.work, f"{name}: training to {FRAMES[condition]} frames")
-        train = ["marl", "train", "--algorithm", algorithm, "--condition", condition, "--set", "evaluation=false"]
-        code = run([*cli, *train, "--frames", str(FRAMES[condition]), "--seed", str(seed), "--out", str(folder)])
+        if algorithm in OURS:
+            log(args.work, f"{name}: training to {EPISODES} episodes")
+            train = ["train", "--resume"] if (folder / "checkpoint.pt").is_file() else [
+                *("train", "--condition", condition, "--predator", algorithm, "--preset", "reproduction"),
+                *("--episodes", str(EPISODES), "--seed", str(seed), "--no-record", "--force"),
+            ]  # fmt: skip
+            team = str(folder)
+        else:
+            log(args.work, f"{name}: training to {FRAMES[condition]} frames")
+            train = ["marl", "train", "--algorithm", algorithm, "--condition", condition, "--set", "evaluation=false"]
+            train += ["--frames", str(FRAMES[condition]), "--seed", str(seed)]
+            team = str(folder / "predator.safetensors")
+        code = run([*cli, *train, "--out", str(folder)], quiet=algorithm in OURS)
         if stopping or code != 0:
             log(args.work, f"{name}: {'stopped' if stopping else f'failed ({code})'}; rerun to resume")
             sys.exit(0 if stopping else 1)
         scored = args.work / "scores" / name
         shutil.rmtree(scored, ignore_errors=True)
-        team = str(folder / "predator.safetensors")
         code = run([*cli, "score", team, "--role", "predator", "--conditions", condition, *SCORE, "--out", str(scored)])
         if stopping or code != 0:
             log(args.work, f"{name}: scoring {'stopped' if stopping else f'failed ({code})'}; rerun to resume")
