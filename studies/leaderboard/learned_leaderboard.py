@@ -5,7 +5,7 @@ preset, 15,000 episodes, seed 0, and the agent modules that play them (``flat(co
 agents, which the hierarchical row plays, are one run of each condition too (the median seed).
 
     python studies/leaderboard/learned_leaderboard.py        # trains runs/leaderboard/<kind>-<condition>/
-    pursuit-bench score scripts.learned_leaderboard:flat --role predator --conditions 1p-high,1p-low …
+    pursuit-bench score studies.leaderboard.learned_leaderboard:flat --role predator --conditions 1p-high,1p-low …
 
 The run folders are generated files (not in git): the command above makes them again, bit for bit
 on one machine.

@@ -4,7 +4,7 @@
 trained in the condition it is asked to play).
 
     python studies/leaderboard/ppo_leaderboard.py            # trains runs/ppo-leaderboard/<condition>.zip
-    pursuit-bench score scripts.ppo_leaderboard:predator --role predator --conditions 1p-high,1p-low …
+    pursuit-bench score studies.leaderboard.ppo_leaderboard:predator --role predator --conditions 1p-high,1p-low …
 
 The models are generated files (not in git); the budget is TIMESTEPS per condition, seed 0,
 SB3's PPO defaults but n_steps and batch_size (as docs/tutorials/sb3.md).
