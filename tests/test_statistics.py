@@ -136,6 +136,24 @@ def test_the_t_interval_covers_what_it_claims() -> None:
         assert abs(skewed - 0.95) <= 0.02, (n, skewed)
 
 
+def test_wilson_s_interval_is_where_the_score_test_does_not_reject() -> None:
+    # Wilson's interval is every p whose score test of the observed share does not reject:
+    # (share - p)^2 <= z^2 p (1 - p) / n, a quadratic in p solved here by numpy's roots
+    z = scipy_stats.norm.ppf(0.975)
+    for count, n in ((0, 10), (3, 10), (10, 10), (7, 30), (1, 1)):
+        share = count / n
+        roots = np.sort(np.roots([1 + z * z / n, -(2 * share + z * z / n), share * share]).real)
+        low, high = stats.wilson_interval(count, n)
+        assert low == pytest.approx(max(roots[0], 0.0), abs=1e-12)
+        assert high == pytest.approx(min(roots[1], 1.0), abs=1e-12)
+    shares, trials = np.array([0.3, np.nan, 0.5]), np.array([10.0, 5.0, 0.0])
+    low, high = stats.wilson_bounds(shares, trials)
+    assert [low[0], high[0]] == stats.wilson_interval(3, 10)
+    assert np.isnan(low[1:]).all() and np.isnan(high[1:]).all()
+    with pytest.raises(ValueError, match="0 <= count <= n"):
+        stats.wilson_interval(11, 10)
+
+
 def test_seeds_for_power_against_the_textbook_value() -> None:
     # a paired t-test, effect size 0.5, two-sided 5 % (one-sided 2.5 %), 80 % power: 34 pairs
     assert stats.seeds_for_power(sd=1.0, delta=0.5) == 34

@@ -24,6 +24,7 @@ from typing import Any, ClassVar
 import numpy as np
 import torch
 
+import pursuit_bench.agents.names as names
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.dqn import DQNLearner
 from pursuit_bench.env.task import N_DIRECTIONS
@@ -104,7 +105,7 @@ class HierarchicalPredator(LearningAgent):
     ``avoidance`` (a task with obstacles: the observations end with range readings) the lower
     layer steers around what they show (:func:`pursuit_bench.rules.navigation.navigate`)."""
 
-    kind = "hierarchical"
+    kind = names.HIERARCHICAL
     n_actions = 2
 
     def __init__(self, name: str, learner: DQNLearner, member: int = 0, *, avoidance: bool = False) -> None:
@@ -126,7 +127,7 @@ class HierarchicalPredator(LearningAgent):
 class Prey(LearningAgent):
     """Deep RL over the 12 directions."""
 
-    kind = "prey"
+    kind = names.PREY
     n_actions = N_DIRECTIONS
 
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
@@ -136,7 +137,7 @@ class Prey(LearningAgent):
 class FlatPredator(LearningAgent):
     """Ablation: deep RL over all 24 (mode, direction) pairs, no rule."""
 
-    kind = "flat"
+    kind = names.FLAT
     n_actions = 2 * N_DIRECTIONS
 
     def to_env(self, choices: np.ndarray, obs: np.ndarray) -> np.ndarray:
@@ -146,7 +147,7 @@ class FlatPredator(LearningAgent):
 class ScriptedAgent:
     """A scripted policy under the agents' interface (``explore`` is ignored)."""
 
-    kind = "scripted"
+    kind = names.SCRIPTED
 
     def __init__(self, name: str, policy: Policy) -> None:
         self.name, self.policy = name, policy

@@ -42,6 +42,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+import pursuit_bench.agents.names as names
 from pursuit_bench.agents.adam import adam_step_kernel
 from pursuit_bench.agents.config import AgentConfig
 from pursuit_bench.agents.dqn import DECISIVE_GAP, DQNLearner, decision_scale
@@ -470,7 +471,7 @@ class ResidualPredator(HierarchicalPredator):
     learner is a :class:`ResidualLearner`: until a correction's own transitions show that it
     pays, it moves exactly as the hierarchical predator."""
 
-    kind = "residual"
+    kind = names.RESIDUAL
     n_actions = 2 * _PER_MODE
 
     def __init__(self, name: str, learner: DQNLearner, member: int = 0, *, avoidance: bool = False) -> None:

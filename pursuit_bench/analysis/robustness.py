@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from pursuit_bench import stats
+from pursuit_bench.agents.names import WITH_AND_WITHOUT_RULE
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.perturbations import Perturbations
 from pursuit_bench.stats.text import p_text, span_text
@@ -264,7 +265,7 @@ def summarise(
 # --- the tests: families of comparisons, each corrected by Holm ---------------------------------
 
 #: The predator kinds compared, in the order the tables print them.
-KINDS = ("hierarchical", "flat")
+KINDS = WITH_AND_WITHOUT_RULE
 #: What the text may call a change (or margin) that is not there: within this much of zero in
 #: return per episode, shown by two one-sided tests. The project's margin
 #: (:data:`stats.EQUIVALENCE_MARGIN`: five captures in a hundred episodes, the pool study's).

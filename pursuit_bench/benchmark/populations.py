@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+import pursuit_bench.agents.names as names
 from pursuit_bench import pretrained
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
@@ -48,7 +49,8 @@ FOLDER = Path(__file__).parents[1] / "pretrained" / "populations"
 """Where the shipped populations lie (package data)."""
 INDEX = "population.json"
 ROLES = ("predator", "prey")
-KINDS = ("hierarchical", "flat", "residual", "scripted")
+KINDS = (names.HIERARCHICAL, names.FLAT, names.RESIDUAL, names.SCRIPTED)
+"""The kinds a population's member may be."""
 RULE_STUDY = "rule-study"
 """The rule study's population of prey (issue 47), the predator role's population once committed."""
 PROVISIONAL = {"predator": "provisional-predators", "prey": "provisional-prey"}

@@ -14,6 +14,8 @@ import matplotlib.pyplot as plt
 import matplotlib.ticker
 import numpy as np
 
+from pursuit_bench.stats.intervals import wilson_bounds
+
 BASELINES = (("always_chase", "always chase", "#dd8452"), ("always_stalk", "always stalk", "#55a868"))
 TRAINED_COLOR = "#4c72b0"
 
@@ -287,14 +289,6 @@ def fig3_png(analysis: dict[str, Any], embeddings: dict[str, Any], closest: dict
     return _png(fig)
 
 
-def wilson_interval(p: np.ndarray, n: np.ndarray, z: float = 1.96) -> tuple[np.ndarray, np.ndarray]:
-    """Wilson's score interval of proportions ``p`` out of ``n`` (NaN where n = 0)."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-        half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return centre - half, centre + half
-
-
 def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
     """P(chase) against distance to the prey, one line per curve with its 95 % band (over seeds
     when given, else Wilson's for the states of one run), and the number of states behind each
@@ -309,7 +303,7 @@ def modes_png(curves: dict[str, dict[str, Any]], title: str) -> bytes:
         if curve.get("ci") is not None:
             low, high = (np.array([np.nan if v is None else v for v in c], dtype=float) for c in curve["ci"])
         else:  # one run: Wilson's 95 % interval of a proportion, its states counted as independent
-            low, high = wilson_interval(p, np.asarray(curve["states"], dtype=float))
+            low, high = wilson_bounds(p, np.asarray(curve["states"], dtype=float))
         top.fill_between(centres, low, high, color=colors(k), alpha=0.15, lw=0)
         width = (bins[1] - bins[0]) / (len(curves) + 1)
         bottom.bar(centres + (k - len(curves) / 2) * width, curve["states"], width=width, color=colors(k))

@@ -54,6 +54,7 @@ from pursuit_bench.stats.intervals import (
     coverage,
     median_interval,
     t_interval,
+    wilson_bounds,
     wilson_interval,
 )
 from pursuit_bench.stats.text import p_text, span_text
@@ -85,5 +86,6 @@ __all__ = [
     "span_text",
     "t_interval",
     "welch_difference",
+    "wilson_bounds",
     "wilson_interval",
 ]

@@ -69,8 +69,15 @@ def wilson_interval(count: int, n: int, confidence: float = CONFIDENCE) -> list[
     interval does not (``studies/coverage/interval_coverage.py`` measures it)."""
     if not 0 <= count <= n or n < 1:
         raise ValueError(f"a share needs 0 <= count <= n and n >= 1, got {count} of {n}")
+    low, high = wilson_bounds(np.array(count / n), np.array(float(n)), confidence)
+    return [float(low), float(high)]
+
+
+def wilson_bounds(share: np.ndarray, n: np.ndarray, confidence: float = CONFIDENCE) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson's score interval, elementwise, of shares ``share`` out of ``n`` trials (arrays of
+    one shape; NaN where n = 0 or the share is NaN), clipped to [0, 1] against rounding."""
     z = float(stats.norm.ppf(0.5 + confidence / 2))
-    share = count / n
-    centre = (share + z * z / (2 * n)) / (1 + z * z / n)
-    half = z / (1 + z * z / n) * np.sqrt(share * (1 - share) / n + z * z / (4 * n * n))
-    return [max(0.0, float(centre - half)), min(1.0, float(centre + half))]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centre = (share + z * z / (2 * n)) / (1 + z * z / n)
+        half = z / (1 + z * z / n) * np.sqrt(share * (1 - share) / n + z * z / (4 * n * n))
+        return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
