@@ -92,6 +92,7 @@ def test_same_seed_same_eval(tmp_path: Path) -> None:
         (["score", "random", "--role", "predator", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
         (["report", ".", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
         (["pool", ".", "--out", "a-file/sub"], "--out a-file/sub: a-file is a file"),
+        (["report", "."], "report also reads a run folder (config.json), a pool study (pool.json), the rule"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(tmp_path: Path, monkeypatch, args: list[str], message: str) -> None:

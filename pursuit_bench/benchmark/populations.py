@@ -29,7 +29,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import shutil
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -100,32 +102,37 @@ class Member:
         """Its agents for the slots ``names`` of ``condition`` (scripted: one copy per slot)."""
         if self.policy is not None:
             return {name: ScriptedAgent(name, SCRIPTED[self.policy][1]()) for name in names}
-        out: dict[str, LearningAgent | ScriptedAgent] = {}
-        for name in names:
-            path = self.files[name]
-            weights, header = pretrained.read(path)
-            config = TrainConfig.from_dict(json.loads(header["training"]))
-            role, given = _role(name), _role(header["agent"])
-            if given != role:
-                raise ValueError(f"{path}: holds {header['agent']}, a {given}, for the slot {name}; expected a {role}")
-            n_agents = len(CONDITIONS[config.condition].agent_names)
-            expected = obs_size(len(CONDITIONS[condition].agent_names))
-            if obs_size(n_agents) != expected:
-                raise ValueError(
-                    f"{path}: a {role} trained in {config.condition}, observing {obs_size(n_agents)} numbers; "
-                    f"a {role} of {condition} observes {expected}"
-                )
-            _, (built,) = build_agents([config], [obs_size(n_agents, config.obstacles > 0)])  # + range readings
-            agent = built[header["agent"]]
-            if not isinstance(agent, LearningAgent):
-                raise ValueError(f"{path}: agent {header['agent']!r} is not a learning agent in its training config")
-            try:
-                agent.learner.load_member_weights(agent.member, weights)
-            except ValueError as error:
-                raise ValueError(f"{path}: {error}") from None
-            agent.name = name
-            out[name] = agent
-        return out
+        return {name: agent_from_file(self.files[name], name, condition) for name in names}
+
+
+def agent_from_file(path: Path, slot: str, condition: str | None = None) -> LearningAgent:
+    """The learned agent a member's weights file holds, named ``slot``, greedy by default; with
+    ``condition``, checked to observe what an agent of that condition observes. ValueError naming
+    the file where it is the wrong role, size or kind."""
+    weights, header = pretrained.read(path)
+    config = TrainConfig.from_dict(json.loads(header["training"]))
+    role, given = _role(slot), _role(header["agent"])
+    if given != role:
+        raise ValueError(f"{path}: holds {header['agent']}, a {given}, for the slot {slot}; expected a {role}")
+    n_agents = len(CONDITIONS[config.condition].agent_names)
+    if condition is not None and obs_size(n_agents) != obs_size(len(CONDITIONS[condition].agent_names)):
+        expected = obs_size(len(CONDITIONS[condition].agent_names))
+        raise ValueError(
+            f"{path}: a {role} trained in {config.condition}, observing {obs_size(n_agents)} numbers; "
+            f"a {role} of {condition} observes {expected}"
+        )
+    _, (built,) = build_agents([config], [obs_size(n_agents, config.obstacles > 0)])  # + range readings
+    agent = built[header["agent"]]
+    if not isinstance(agent, LearningAgent) or agent.kind != header.get("kind"):
+        raise ValueError(
+            f"{path}: agent {header['agent']!r} is not a learning {header.get('kind')} agent in its config"
+        )
+    try:
+        agent.learner.load_member_weights(agent.member, weights)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
+    agent.name = slot
+    return agent
 
 
 def _role(agent: str) -> str:
@@ -195,18 +202,26 @@ def load(name: str, condition: str, *, folder: Path | None = None) -> Population
     what is wrong. Reads ``population.json`` only: the weights are read when a member plays."""
     root = folder or FOLDER
     where = root / name / condition
-    index = where / INDEX
-    if not index.is_file():
+    if not (where / INDEX).is_file():
         shipped = available(folder)
         if name not in shipped:
             raise ValueError(f"no population {name!r}: expected one of {', '.join(shipped) or '(none shipped)'}")
         raise ValueError(f"population {name!r} has no condition {condition!r}: it has {', '.join(shipped[name])}")
+    return read(where, name, condition)
+
+
+def read(where: Path, name: str | None = None, condition: str | None = None) -> Population:
+    """The population whose ``population.json`` lies in the folder ``where``, checked against the
+    format (and to be ``name`` of ``condition`` where given); ValueError saying what is wrong."""
+    index = where / INDEX
     try:
         data = json.loads(index.read_text())
     except (OSError, json.JSONDecodeError) as error:
         raise _bad(index, f"not readable JSON ({error})") from None
-    if not isinstance(data, dict) or (data.get("population"), data.get("condition")) != (name, condition):
-        raise _bad(index, f"expected population {name!r} of condition {condition!r}")
+    said = (data.get("population"), data.get("condition")) if isinstance(data, dict) else (None, None)
+    if said[1] not in CONDITIONS or not isinstance(said[0], str) or (name or said[0], condition or said[1]) != said:
+        raise _bad(index, f"expected population {name or '(a name)'!r} of condition {condition or '(a condition)'!r}")
+    condition = data["condition"]
     if data.get("role") not in ROLES or not isinstance(data.get("provisional"), bool):
         raise _bad(index, "expected role 'prey' or 'predator' and provisional true or false")
     role = data["role"]
@@ -221,7 +236,7 @@ def load(name: str, condition: str, *, folder: Path | None = None) -> Population
     trained_runs = [((m.trained or {}).get("condition", condition), m.seed) for m in members if m.seed is not None]
     if len(set(trained_runs)) != len(trained_runs):
         raise _bad(index, "two members are one run (trained in the same condition with the same seed)")
-    return Population(name, condition, role, data["provisional"], tuple(members))
+    return Population(data["population"], condition, role, data["provisional"], tuple(members))
 
 
 def _member(entry: Any, where: Path, index: Path, role: str, slots: list[str]) -> Member:
@@ -245,6 +260,41 @@ def _member(entry: Any, where: Path, index: Path, role: str, slots: list[str]) -
     if not isinstance(seed, int) or isinstance(seed, bool):
         raise _bad(index, f"member {name}: a learned member needs an integer seed")
     return Member(name, entry["kind"], None, seed, entry.get("trained"), paths)
+
+
+def store_agent(
+    where: Path, member: str, slot: str, agent: LearningAgent, config: TrainConfig, *, episodes: int,
+    provenance: dict[str, str],
+) -> str:  # fmt: skip
+    """Write ``agent``'s weights as member ``member``'s ``slot`` in the condition folder ``where``
+    (``where/<member>/<slot>.safetensors``, the shipped agents' format, ``episodes`` trained),
+    written beside and renamed into place; returns the path relative to ``where``, as
+    ``population.json`` names it."""
+    (where / member).mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=where) as scratch:
+        (written,) = pretrained.export(
+            {slot: agent}, config, Path(scratch), trained_episodes=episodes, provenance=provenance
+        )
+        os.replace(written, where / member / f"{slot}{pretrained.SUFFIX}")
+    return f"{member}/{slot}{pretrained.SUFFIX}"
+
+
+def write_index(
+    where: Path, name: str, condition: str, role: str, members: list[dict[str, Any]], *, provisional: bool = False,
+    **about: Any,
+) -> Path:  # fmt: skip
+    """``where/population.json`` (the folder of population ``name``'s ``condition``, by the
+    shipped ones' layout ``<root>/<name>/<condition>``) for ``members`` (the format's entries:
+    name, kind, policy, seed, trained, files relative to ``where``, which must be there), each
+    entry checked as :func:`read` checks it before anything is written; ``about``: further keys of
+    the document (e.g. ``obstacles``). Returns its path."""
+    index = where / INDEX
+    slots = list(CONDITIONS[condition].agent_names)
+    for entry in members:
+        _member(entry, where, index, role, slots[:-1] if role == "predator" else slots[-1:])
+    document = {"population": name, "condition": condition, **about, "role": role, "provisional": provisional}
+    atomic_write_text(index, json.dumps({**document, "members": members}, indent=2) + "\n")
+    return index
 
 
 def size_bytes(folder: Path | None = None) -> int:
@@ -309,9 +359,7 @@ def build_provisional(dest: Path | None = None) -> list[Path]:
                 {"name": p, "kind": "scripted", "policy": p, "seed": None, "trained": None, "files": {}}
                 for p in scripted
             ]
-            index = {"population": name, "condition": condition, "role": role, "provisional": True, "members": members}
-            atomic_write_text(where / INDEX, json.dumps(index, indent=2) + "\n")
-            written.append(where / INDEX)
+            written.append(write_index(where, name, condition, role, members, provisional=True))
     return written
 
 

@@ -6,6 +6,7 @@ learning curves and a summary of one run.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import click
@@ -32,24 +33,17 @@ def report(where: Path, out: Path | None) -> None:
 
     if out is not None:
         check_out_folder(out)
-    if (where / "config.json").is_file():
-        _report_run(where, out or where)
-        return
-    if (where / "pool.json").is_file():
-        _report_pool(where, out or where)
-        return
-    if (where / "rule-study.json").is_file():
-        _report_rule_study(where, out or where)
-        return
-    if (where / "residual-study.json").is_file():
-        _report_rule_study(where, out or where, "residual-study")
-        return
+    for marker, _, handler in FOLDERS:
+        if (where / marker).is_file():
+            handler(where, out or where)
+            return
     try:
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
         totals = reports.write(where, out)
     except ValueError as error:
-        raise BadInput(str(error)) from None
+        kinds = ", ".join(f"{what} ({marker})" for marker, what, _ in FOLDERS)
+        raise BadInput(f"{error} (report also reads {kinds})") from None
     click.echo(
         f"{counted(totals['panels'], 'panel')}: {totals['better']} better, {totals['equivalent']} equivalent, "
         f"{totals['not resolved']} not resolved, {totals['worse']} worse (paired by seed, Holm-corrected); "
@@ -61,6 +55,10 @@ def report(where: Path, out: Path | None) -> None:
             f"{row['not resolved']} not resolved, {row['worse']} worse"
         )
     click.echo(f"written in {out or where}: {', '.join(totals['written'])}")
+
+
+def _report_residual_study(where: Path, out: Path) -> None:
+    _report_rule_study(where, out, "residual-study")
 
 
 def _report_pool(where: Path, out: Path) -> None:
@@ -138,3 +136,13 @@ def _report_run(folder: Path, out: Path) -> None:
                 f"  {path.name}: {panel['predator']} {result_json['predator_kind']} {panel['trained']:+.3f}, "
                 f"always-chase {panel['always_chase']:+.3f}, always-stalk {panel['always_stalk']:+.3f}"
             )
+
+
+#: The folders ``report`` reads besides a sweep and its compact results, each told by the file
+#: it holds (looked for in this order): the file, what the folder is, what writes its report.
+FOLDERS: tuple[tuple[str, str, Callable[[Path, Path], None]], ...] = (
+    ("config.json", "a run folder", _report_run),
+    ("pool.json", "a pool study", _report_pool),
+    ("rule-study.json", "the rule study's results", _report_rule_study),
+    ("residual-study.json", "the residual study's results", _report_residual_study),
+)

@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import gzip
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -87,69 +85,46 @@ def check_design(judged: dict[str, list[int]], population: list[dict[str, Any]])
 
 def write_population(where: Path, condition: str, prey: dict[str, Any], trained: dict[str, dict[str, Any]]) -> Path:
     """Write ``where/<condition>/population.json`` and each learned member's prey
-    (``prey[name]``: (agent, TrainConfig)) as ``<member>/prey_0.safetensors`` in the shipped
-    agents' format; ``trained[name]``: preset, episodes, predator_kind, build. Returns the
-    population.json path."""
-    from pursuit_bench import pretrained
-    from pursuit_bench.io.files import atomic_write_text
+    (``prey[name]``: (agent, TrainConfig)) as ``<member>/prey_0.safetensors`` in the population
+    format (:func:`pursuit_bench.benchmark.populations.write_index`); ``trained[name]``: preset,
+    episodes, predator_kind, build. Returns the population.json path."""
+    from pursuit_bench.benchmark import populations
 
     folder = where / condition
-    folder.mkdir(parents=True, exist_ok=True)
     entries = []
     for member in members(condition):
         name = member["name"]
         files: dict[str, str] = {}
         if member["policy"] is None:
             agent, config = prey[name]
-            with tempfile.TemporaryDirectory(dir=where) as scratch:
-                (written,) = pretrained.export(
-                    {"prey_0": agent},
-                    config,
-                    Path(scratch),
-                    trained_episodes=int(trained[name]["episodes"]),
-                    provenance={"population": POPULATION, "member": name, "build": str(trained[name]["build"])},
-                )
-                (folder / name).mkdir(parents=True, exist_ok=True)
-                os.replace(written, folder / name / "prey_0.safetensors")
-            files = {"prey_0": f"{name}/prey_0.safetensors"}
+            provenance = {"population": POPULATION, "member": name, "build": str(trained[name]["build"])}
+            episodes = int(trained[name]["episodes"])
+            stored = populations.store_agent(
+                folder, name, "prey_0", agent, config, episodes=episodes, provenance=provenance
+            )
+            files = {"prey_0": stored}
         entries.append({**member, "trained": trained.get(name) if member["policy"] is None else None, "files": files})
-    document = {
-        "population": POPULATION,
-        "condition": condition,
-        "role": "prey",
-        "provisional": False,
-        "members": entries,
-    }
-    atomic_write_text(folder / "population.json", json.dumps(document, indent=2) + "\n")
-    return folder / "population.json"
+    return populations.write_index(folder, POPULATION, condition, "prey", entries)
 
 
 def load_member(path: Path) -> Any:
     """One member's prey from its safetensors file: the agent, greedy by default."""
-    from pursuit_bench import pretrained
-    from pursuit_bench.agents.kinds import LearningAgent
-    from pursuit_bench.env.task import obs_size
-    from pursuit_bench.training.train import TrainConfig, build_agents
+    from pursuit_bench.benchmark.populations import agent_from_file
 
-    weights, header = pretrained.read(path)
-    config = TrainConfig.from_dict(json.loads(header["training"]))
-    n_agents = len(CONDITIONS[config.condition].agent_names)
-    _, (agents,) = build_agents([config], [obs_size(n_agents, config.obstacles > 0)])  # + range readings
-    prey = agents[header["agent"]]
-    if not isinstance(prey, LearningAgent) or prey.kind != header.get("kind"):
-        raise ValueError(f"{path}: holds a {header.get('kind')} agent, not a learning prey")
-    prey.learner.load_member_weights(prey.member, weights)
-    return prey
+    return agent_from_file(path, "prey_0")
 
 
 def read_population(folder: Path) -> list[dict[str, Any]]:
-    """A condition's population.json (its members), checked against the design."""
-    document = json.loads((folder / "population.json").read_text())
-    names = [m["name"] for m in document["members"]]
-    expected = [m["name"] for m in members(document["condition"])]
+    """A condition's population.json (its members, as the format's entries), read and checked by
+    the population format's reader and against the design."""
+    from pursuit_bench.benchmark import populations
+
+    read = populations.read(folder)
+    names = [m.name for m in read.members]
+    expected = [m["name"] for m in members(read.condition)]
     if names != expected:
         raise ValueError(f"{folder}: members {names}, expected {expected}")
-    return list(document["members"])
+    return list(json.loads((folder / populations.INDEX).read_text())["members"])
 
 
 # --- evaluation of a judged run -----------------------------------------------------------------
