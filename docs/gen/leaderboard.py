@@ -1,10 +1,13 @@
 """docs/leaderboard.md's tables, regenerated from the committed score files: the rows listed in
 results/score/rows.json (each a score.json under results/score/ and how its agent was trained),
 written between the page's ``<!-- leaderboard:begin -->`` and ``<!-- leaderboard:end -->``
-markers; the prose around them is the page's own. tests/test_score.py checks the page is what
-this writes, byte for byte. A partial row (scored in fewer conditions than all of them, or with
-fewer episodes per member than the leaderboard's) is marked † and listed after the full ones,
-its shortfall said under the table: its aggregate is over less, and no row is ranked.
+markers, and the MARL rows (issue 65, studies/marl/PLAN.md: results/marl/, a score.json per
+learner, condition and seed) between ``<!-- marl:begin -->`` and ``<!-- marl:end -->``, with
+the protocol's comparisons once every row is in; the prose around them is the page's own.
+tests/test_score.py checks the page is what this writes, byte for byte. A partial row (scored in
+fewer conditions than all of them, or with fewer episodes per member than the leaderboard's) is
+marked † and listed after the full ones, its shortfall said under the table: its aggregate is
+over less, and no row is ranked.
 
     python docs/gen/leaderboard.py            # rewrite docs/leaderboard.md and pursuit_bench/benchmark/leaderboard.json
     python docs/gen/leaderboard.py --check    # exit 1 if either is not up to date
@@ -17,6 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from pursuit_bench import stats
 from pursuit_bench.benchmark import score
 from pursuit_bench.io.files import atomic_write_text
 
@@ -28,6 +32,14 @@ BEGIN, END = "<!-- leaderboard:begin -->", "<!-- leaderboard:end -->"
 EPISODES = score.LEADERBOARD_EPISODES
 PARTIAL = "†"
 shortfall = score.shortfall
+MARL = ROOT / "results" / "marl"
+MARL_BEGIN, MARL_END = "<!-- marl:begin -->", "<!-- marl:end -->"
+#: The MARL rows' learners (studies/marl/run.py's names) as the table names them: BenchMARL's
+#: three, then ours, which each of theirs is compared with.
+THEIRS = {"ippo": "IPPO (BenchMARL)", "mappo": "MAPPO (BenchMARL)", "iql": "IQL (BenchMARL)"}
+OURS = {"flat": "flat DQN (ours)", "hierarchical": "hierarchical (ours)"}
+MARL_CONDITIONS = ("1p-high", "2p-low-shared", "3p-high-individual")
+MARL_SEEDS = (0, 1, 2)
 
 
 def summary(results: Path = RESULTS) -> str:
@@ -80,11 +92,94 @@ def tables(results: Path = RESULTS) -> str:
     return "\n".join(out)
 
 
-def render(page: str, results: Path = RESULTS) -> str:
+def marl_scores(folder: Path = MARL) -> dict[tuple[str, str], dict[int, tuple[float, list[float]]]]:
+    """Per (learner, condition), each scored seed's normalized score and its interval (the
+    score file's aggregate over its one condition: members and episodes resampled)."""
+    out: dict[tuple[str, str], dict[int, tuple[float, list[float]]]] = {}
+    for learner in [*THEIRS, *OURS]:
+        for condition in MARL_CONDITIONS:
+            for seed in MARL_SEEDS:
+                path = folder / f"{condition}-{learner}-seed{seed}.score.json"
+                if path.is_file():
+                    result = json.loads(path.read_text())
+                    value = result["conditions"][condition]["normalized"]
+                    out.setdefault((learner, condition), {})[seed] = (value, result["aggregate"]["ci"])
+    return out
+
+
+def marl_comparisons(scores: dict[tuple[str, str], dict[int, tuple[float, list[float]]]]) -> list[dict[str, Any]]:
+    """The protocol's family (PLAN.md, "The comparison rows"): each of BenchMARL's learners minus
+    each of ours in each condition, Welch over the seeds, Holm over all of them; empty until every
+    seed of every learner is in (the family is fixed, so it is not tested in part)."""
+    pairs = [(t, o, c) for c in MARL_CONDITIONS for t in THEIRS for o in OURS]
+    if any(len(scores.get((k, c), {})) < len(MARL_SEEDS) for t, o, c in pairs for k in (t, o)):
+        return []
+    rows = []
+    for theirs, ours, condition in pairs:
+        a = [scores[theirs, condition][s][0] for s in MARL_SEEDS]
+        b = [scores[ours, condition][s][0] for s in MARL_SEEDS]
+        rows.append({"theirs": theirs, "ours": ours, "condition": condition, **stats.welch_difference(a, b)})
+    for row, adjusted in zip(rows, stats.holm([r["p"] for r in rows]), strict=True):
+        row["p_holm"] = float(adjusted)
+    return rows
+
+
+def marl_tables(folder: Path = MARL) -> str:
+    """The MARL rows: each learner's normalized score per seed with its interval and the mean
+    over the seeds in, per condition; then the comparisons (or what they wait for)."""
+    scores = marl_scores(folder)
+    names = {**THEIRS, **OURS}
+    out = [MARL_BEGIN, "", "| learner | seed | " + " | ".join(MARL_CONDITIONS) + " |", "|---|---|" + "---:|" * 3]
+    missing = 0
+    for learner, name in names.items():
+        for seed in MARL_SEEDS:
+            cells = []
+            for condition in MARL_CONDITIONS:
+                got = scores.get((learner, condition), {}).get(seed)
+                missing += got is None
+                cells.append("–" if got is None else f"{got[0]:.2f} [{got[1][0]:.2f}, {got[1][1]:.2f}]")
+            out.append(f"| {name} | {seed} | " + " | ".join(cells) + " |")
+        means = []
+        for condition in MARL_CONDITIONS:
+            got = scores.get((learner, condition), {})
+            mean = sum(v for v, _ in got.values()) / len(got) if got else None
+            means.append("–" if mean is None else f"**{mean:.2f}**" + (f" ({len(got)} of 3)" if len(got) < 3 else ""))
+        out.append(f"| {name} | mean | " + " | ".join(means) + " |")
+    out.append("")
+    comparisons = marl_comparisons(scores)
+    if not comparisons:
+        out += [
+            f"{missing} of {len(names) * len(MARL_CONDITIONS) * len(MARL_SEEDS)} rows still to come. The comparisons "
+            "(each BenchMARL learner minus each of ours, per condition: Welch over the three seeds, Holm over "
+            f"the {len(THEIRS) * len(OURS) * len(MARL_CONDITIONS)}) are made once every row is in.",
+            "",
+        ]
+    else:
+        out += [
+            "| condition | learner | minus | difference [95 % CI] | Welch df | p (Holm) |",
+            "|---|---|---|---:|---:|---:|",
+        ]
+        for row in comparisons:
+            low, high = row["ci"]
+            out.append(
+                f"| {row['condition']} | {THEIRS[row['theirs']]} | {OURS[row['ours']]} | {row['mean']:+.2f} "
+                f"[{low:+.2f}, {high:+.2f}] | {row['df']:.1f} | {row['p_holm']:.3f} |"
+            )
+        out.append("")
+    out.append(MARL_END)
+    return "\n".join(out)
+
+
+def render(page: str, results: Path = RESULTS, marl: Path = MARL) -> str:
     """``page`` with its tables regenerated."""
     before, _, rest = page.partition(BEGIN)
     _, _, after = rest.partition(END)
-    return before + tables(results) + after
+    page = before + tables(results) + after
+    if MARL_BEGIN in page:
+        before, _, rest = page.partition(MARL_BEGIN)
+        _, _, after = rest.partition(MARL_END)
+        page = before + marl_tables(marl) + after
+    return page
 
 
 def main() -> None:
