@@ -87,6 +87,39 @@ def test_a_member_round_trips_through_the_population_format(tmp_path: Path) -> N
     ]
 
 
+def test_a_population_that_would_not_read_back_is_not_written(tmp_path: Path) -> None:
+    from pursuit_bench.benchmark import populations
+
+    fleeing = {"name": "FleeingPrey", "kind": "scripted", "policy": "FleeingPrey", "seed": None, "trained": None}
+    where = tmp_path / "p" / "1p-low"
+    where.mkdir(parents=True)
+    index = populations.write_index(where, "p", "1p-low", "prey", [{**fleeing, "files": {}}])
+    before = index.read_bytes()
+    assert populations.read(where, "p", "1p-low").members[0].policy == "FleeingPrey"
+    for members, message in (
+        ([], "at least one member"),
+        ([{**fleeing, "files": {}}, {**fleeing, "files": {}}], "each named once"),
+        ([{**fleeing, "kind": "learned", "files": {}}], "a kind among"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            populations.write_index(where, "p", "1p-low", "prey", members)
+        assert index.read_bytes() == before
+    with pytest.raises(ValueError, match="of condition '9p-low'"):
+        populations.write_index(where, "p", "9p-low", "prey", [{**fleeing, "files": {}}])
+
+
+def test_the_kinds_names_are_the_classes_own() -> None:
+    from pursuit_bench.agents import names
+    from pursuit_bench.agents.kinds import FlatPredator, HierarchicalPredator, Prey
+    from pursuit_bench.agents.residual import ResidualPredator
+    from pursuit_bench.rules.policies import FleeingPrey
+
+    assert (HierarchicalPredator.kind, FlatPredator.kind, ResidualPredator.kind, Prey.kind) == (
+        names.HIERARCHICAL, names.FLAT, names.RESIDUAL, names.PREY,
+    )  # fmt: skip
+    assert names.FLEEING == FleeingPrey.__name__ == rule_study.FLEEING
+
+
 def fake_run(kind: str, seed: int, margin: float, budget: int = 15000) -> dict:
     """A judged run of 1p-high whose pool margin at the last budget is ``margin`` (always-stalk
     at 0, always-chase below, the trained predator at ``margin``) against every member."""

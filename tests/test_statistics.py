@@ -224,6 +224,7 @@ def test_statistics_md_prints_what_its_script_gives() -> None:
     interval_coverage = load_script("studies/coverage/interval_coverage.py")
     text = (ROOT / "docs" / "statistics.md").read_text()
     assert interval_coverage.coverage_markdown() in text
+    assert interval_coverage.marl_markdown() in text  # the MARL rows' 3 seeds a learner
     figures = interval_coverage.skewness_figures()
     ours, normal, mild, strong = (f"{v:+.2f}".replace("-", "−") for v in figures.values())
     normal = normal.lstrip("+−") if normal in ("+0.00", "−0.00") else normal

@@ -16,6 +16,7 @@ over less, and no row is ranked.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -143,7 +144,11 @@ def marl_tables(folder: Path = MARL) -> str:
         for condition in MARL_CONDITIONS:
             got = scores.get((learner, condition), {})
             mean = sum(v for v, _ in got.values()) / len(got) if got else None
-            means.append("–" if mean is None else f"**{mean:.2f}**" + (f" ({len(got)} of 3)" if len(got) < 3 else ""))
+            means.append(
+                "–"
+                if mean is None
+                else f"**{mean:.2f}**" + (f" ({len(got)} of {len(MARL_SEEDS)})" if len(got) < len(MARL_SEEDS) else "")
+            )
         out.append(f"| {name} | mean | " + " | ".join(means) + " |")
     out.append("")
     comparisons = marl_comparisons(scores)
@@ -161,9 +166,10 @@ def marl_tables(folder: Path = MARL) -> str:
         ]
         for row in comparisons:
             low, high = row["ci"]
+            df = "–" if math.isnan(row["df"]) else f"{row['df']:.1f}"  # no spread in either group
             out.append(
                 f"| {row['condition']} | {THEIRS[row['theirs']]} | {OURS[row['ours']]} | {row['mean']:+.2f} "
-                f"[{low:+.2f}, {high:+.2f}] | {row['df']:.1f} | {row['p_holm']:.3f} |"
+                f"[{low:+.2f}, {high:+.2f}] | {df} | {row['p_holm']:.3f} |"
             )
         out.append("")
     out.append(MARL_END)

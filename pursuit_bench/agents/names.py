@@ -14,6 +14,9 @@ PREY = "prey"
 """The learning prey."""
 SCRIPTED = "scripted"
 """A fixed policy wrapped as an agent (the baselines, FleeingPrey)."""
+FLEEING = "FleeingPrey"
+"""The scripted prey's name as populations and the studies' results spell it (the class name of
+``rules.policies.FleeingPrey``, tested)."""
 WITH_AND_WITHOUT_RULE = (HIERARCHICAL, FLAT)
 """The pair the rule's value is read from (the rule study, the robustness ladders): with the
 rule first, so that a difference is hierarchical − flat."""

@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-import pursuit_bench.agents.names as names
+import pursuit_bench.agents.names as kind_names
 from pursuit_bench import pretrained
 from pursuit_bench.agents.kinds import LearningAgent, ScriptedAgent
 from pursuit_bench.env.conditions import CONDITIONS
@@ -51,7 +51,7 @@ FOLDER = Path(__file__).parents[1] / "pretrained" / "populations"
 """Where the shipped populations lie (package data)."""
 INDEX = "population.json"
 ROLES = ("predator", "prey")
-KINDS = (names.HIERARCHICAL, names.FLAT, names.RESIDUAL, names.SCRIPTED)
+KINDS = (kind_names.HIERARCHICAL, kind_names.FLAT, kind_names.RESIDUAL, kind_names.SCRIPTED)
 """The kinds a population's member may be."""
 RULE_STUDY = "rule-study"
 """The rule study's population of prey (issue 47), the predator role's population once committed."""
@@ -218,8 +218,17 @@ def read(where: Path, name: str | None = None, condition: str | None = None) -> 
         data = json.loads(index.read_text())
     except (OSError, json.JSONDecodeError) as error:
         raise _bad(index, f"not readable JSON ({error})") from None
+    return _population(data, where, name, condition)
+
+
+def _population(data: Any, where: Path, name: str | None = None, condition: str | None = None) -> Population:
+    """The population a ``population.json`` document (``data``) in ``where`` describes, checked
+    against the format (and to be ``name`` of ``condition`` where given): what :func:`read`
+    reads and :func:`write_index` writes. ValueError saying what is wrong."""
+    index = where / INDEX
     said = (data.get("population"), data.get("condition")) if isinstance(data, dict) else (None, None)
-    if said[1] not in CONDITIONS or not isinstance(said[0], str) or (name or said[0], condition or said[1]) != said:
+    known = isinstance(said[1], str) and said[1] in CONDITIONS and isinstance(said[0], str)
+    if not known or (name or said[0], condition or said[1]) != said:
         raise _bad(index, f"expected population {name or '(a name)'!r} of condition {condition or '(a condition)'!r}")
     condition = data["condition"]
     if data.get("role") not in ROLES or not isinstance(data.get("provisional"), bool):
@@ -230,8 +239,8 @@ def read(where: Path, name: str | None = None, condition: str | None = None) -> 
     members = []
     for entry in data.get("members") or []:
         members.append(_member(entry, where, index, role, slots))
-    names = [m.name for m in members]
-    if not members or len(set(names)) != len(names):
+    named = [m.name for m in members]
+    if not members or len(set(named)) != len(named):
         raise _bad(index, "expected at least one member, each named once")
     trained_runs = [((m.trained or {}).get("condition", condition), m.seed) for m in members if m.seed is not None]
     if len(set(trained_runs)) != len(trained_runs):
@@ -285,15 +294,15 @@ def write_index(
 ) -> Path:  # fmt: skip
     """``where/population.json`` (the folder of population ``name``'s ``condition``, by the
     shipped ones' layout ``<root>/<name>/<condition>``) for ``members`` (the format's entries:
-    name, kind, policy, seed, trained, files relative to ``where``, which must be there), each
-    entry checked as :func:`read` checks it before anything is written; ``about``: further keys of
-    the document (e.g. ``obstacles``). Returns its path."""
+    name, kind, policy, seed, trained, files relative to ``where``, which must be there), the
+    document checked as :func:`read` checks it before anything is written (ValueError, and nothing
+    written, if it would not read back); ``about``: further keys of the document (e.g.
+    ``obstacles``). Returns its path."""
     index = where / INDEX
-    slots = list(CONDITIONS[condition].agent_names)
-    for entry in members:
-        _member(entry, where, index, role, slots[:-1] if role == "predator" else slots[-1:])
     document = {"population": name, "condition": condition, **about, "role": role, "provisional": provisional}
-    atomic_write_text(index, json.dumps({**document, "members": members}, indent=2) + "\n")
+    document["members"] = members
+    _population(document, where, name, condition)
+    atomic_write_text(index, json.dumps(document, indent=2) + "\n")
     return index
 
 

@@ -41,9 +41,11 @@ def report(where: Path, out: Path | None) -> None:
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
         totals = reports.write(where, out)
-    except ValueError as error:
+    except reports.NoRuns as error:  # none of the folders report reads: say which it does
         kinds = ", ".join(f"{what} ({marker})" for marker, what, _ in FOLDERS)
         raise BadInput(f"{error} (report also reads {kinds})") from None
+    except ValueError as error:
+        raise BadInput(str(error)) from None
     click.echo(
         f"{counted(totals['panels'], 'panel')}: {totals['better']} better, {totals['equivalent']} equivalent, "
         f"{totals['not resolved']} not resolved, {totals['worse']} worse (paired by seed, Holm-corrected); "

@@ -101,10 +101,12 @@ def collect(where: Path) -> list[RunResult]:
         return load_results(where)
     results = [_from_folder(eval_json.parent) for eval_json in sorted((where / "runs").glob("*/eval.json"))]
     if not results:
-        raise ValueError(
-            f"{where}: no evaluated run folder (runs/*/eval.json) and no results.json; run the sweep first"
-        )
+        raise NoRuns(f"{where}: no evaluated run folder (runs/*/eval.json) and no results.json; run the sweep first")
     return results
+
+
+class NoRuns(ValueError):
+    """A folder with neither a sweep's evaluated runs nor compact results: not one this reads."""
 
 
 def export(results: list[RunResult], out: Path, about: dict[str, Any]) -> int:

@@ -23,14 +23,12 @@ from typing import Any
 import numpy as np
 
 from pursuit_bench import stats
-from pursuit_bench.agents.names import WITH_AND_WITHOUT_RULE
+from pursuit_bench.agents.names import FLEEING, WITH_AND_WITHOUT_RULE
 from pursuit_bench.env.conditions import CONDITIONS
-from pursuit_bench.rules.policies import FleeingPrey
 
 FORMAT = "pursuit-bench-rule-study-1"
 POPULATION = "rule-study"
 KINDS = WITH_AND_WITHOUT_RULE
-FLEEING = FleeingPrey.__name__
 #: Training budgets every judged run is evaluated at (checkpoints kept; the last is the run's end).
 BUDGETS = (1500, 5000, 10500, 12750, 15000)
 #: Learned prey of each kind in a condition's population.

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import shutil
 import statistics
 import sys
@@ -38,11 +37,10 @@ def _own_design() -> Any:
 
 
 design = _own_design()
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))  # the drivers' shared module alone
+import driver  # noqa: E402
 
-
-def child_cpu() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
+child_cpu = driver.child_cpu
 
 
 def measure(work: Path, condition: str, kind: str, seed: int, more: int) -> dict[str, Any]:

@@ -29,12 +29,9 @@ are trained.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
-import resource
 import shutil
-import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -55,6 +52,10 @@ def _own_design() -> Any:
 
 
 design = _own_design()
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))  # the drivers' shared module alone
+import driver  # noqa: E402
+
+log = driver.log
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -64,31 +65,14 @@ STAGES = ("population", "judged")
 PROGRESS_EVERY = 25_000
 
 
-def log(work: Path, line: str) -> None:
-    stamped = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M:%S} {line}"
-    print(stamped, flush=True)
-    with (work / "progress.log").open("a") as file:
-        file.write(stamped + "\n")
-
-
 def package_build() -> dict[str, str]:
     """The build of the package this process imports: its checkout's commit and fingerprints.
     SystemExit if the package has uncommitted .py changes (a run is never trained by code that
     no commit holds)."""
     import pursuit_bench
 
-    root = Path(pursuit_bench.__file__).resolve().parents[1]
-
-    def git(*command: str) -> str:
-        return subprocess.run(["git", *command], cwd=root, capture_output=True, text=True, check=True).stdout
-
-    dirty = [line for line in git("status", "--porcelain", "--", "pursuit_bench").splitlines() if line.endswith(".py")]
-    if dirty:
-        raise SystemExit(f"{root}: the package has uncommitted code changes ({dirty[0].strip()} …): not a build")
-    return {
-        "commit": git("rev-parse", "HEAD").strip(),
-        **design.fingerprints(git("ls-files", "-s", "--", "pursuit_bench")),
-    }
+    commit, listed = driver.committed_package(Path(pursuit_bench.__file__).resolve().parents[1])
+    return {"commit": commit, **design.fingerprints(listed)}
 
 
 def check_build(work: Path, current: dict[str, str], pinned: dict[str, str]) -> None:
@@ -101,51 +85,29 @@ def check_build(work: Path, current: dict[str, str], pinned: dict[str, str]) -> 
                 f"build.json pins {pinned[key]} (commit {pinned['commit'][:10]}); "
                 f"run with PYTHONPATH set to a checkout of {pinned['commit'][:10]}"
             )
-    path = work / "study.json"
-    if path.exists():
-        started = json.loads(path.read_text())
-        if started["code"] != current["code"]:
-            raise SystemExit(f"{path}: the study started with code {started['code']}, now {current['code']}")
-    else:
-        path.write_text(json.dumps(current, indent=2) + "\n")
+    driver.check_started(work, current)
 
 
 def sweep(work: Path, folder: Path, plan: Any, workers: int, stop: list[bool], finished: Any = None) -> bool:
     """Train ``plan``'s runs in ``folder`` (resuming what is there); whether all are done.
-    ``finished(name)`` is called as each run ends (the driver stores a population member then)."""
-    from pursuit_bench.training.sweep import open_sweep, run_sweep
-
-    note = open_sweep(folder, plan)
-    if note:
-        log(work, note)
-    episodes = {name: 0 for name in plan.runs()}
-    start = child_cpu()
-
-    def heard(kind: str, name: str, value: Any) -> None:
-        if kind == "done":
-            log(work, f"trained {name}")
-            if finished is not None:
-                finished(name)
-        elif kind == "episode":
-            if not episodes[name]:
-                log(work, f"{name}: training from episode {value}")
-            elif value % PROGRESS_EVERY == 0:
-                log(work, f"{name}: {value} episodes")
-            episodes[name] = value
-
-    done = run_sweep(folder, plan, workers=workers, record=False, on_message=heard, should_stop=lambda: stop[0])
-    record = {"sweep": folder.name, "part": folder.parent.name, "done": done, "worker_cpu_s": child_cpu() - start}
+    ``finished(name)`` is called as each run ends (the driver stores a population member then).
+    The workers' CPU time goes into ``work/cpu.jsonl`` (PLAN.md's rates, from the study's own runs)."""
+    start = driver.child_cpu()
+    episodes: dict[str, int] = {}
+    done = driver.sweep(
+        work, folder, plan, workers, stop, finished=finished, progress_every=PROGRESS_EVERY, episodes=episodes
+    )
+    record = {
+        "sweep": folder.name,
+        "part": folder.parent.name,
+        "done": done,
+        "worker_cpu_s": driver.child_cpu() - start,
+    }
     record["last_episode"] = {name: n for name, n in episodes.items() if n}
-    with (work / "cpu.jsonl").open("a") as file:  # PLAN.md's rates, from the study's own runs
+    with (work / "cpu.jsonl").open("a") as file:
         file.write(json.dumps(record) + "\n")
     log(work, f"{folder.parent.name}/{folder.name}: workers' CPU {record['worker_cpu_s']:.0f} s this time")
     return done
-
-
-def child_cpu() -> float:
-    """CPU seconds of this process's ended children (the sweep's workers, once joined)."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
 
 
 def trained(folder: Path, episodes: int) -> bool:
@@ -452,15 +414,7 @@ def drive(args: Any) -> int:
         args.build = package_build()
         check_build(args.work, args.build, json.loads((HERE / "build.json").read_text()))
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-    stop = [False]
-
-    def asked(signum: int, frame: Any) -> None:
-        if not stop[0]:
-            log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
-        stop[0] = True
-
-    signal.signal(signal.SIGTERM, asked)
-    signal.signal(signal.SIGINT, asked)
+    stop = driver.stop_flag(args.work)
     log(
         args.work,
         f"budget study: {', '.join(args.conditions)}; stages {', '.join(args.stages)}; budgets {list(args.budgets)}; "

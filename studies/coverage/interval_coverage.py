@@ -191,10 +191,42 @@ def skewness_figures() -> dict[str, float]:
     return figures
 
 
+#: Runs a kind in the MARL rows' comparisons (studies/marl/PLAN.md): three seeds of each learner.
+MARL_RUNS = 3
+
+
+def marl_markdown() -> str:
+    """Welch's interval at the MARL rows' 3 runs a kind: the unsplit cases; then a learner whose
+    runs each fail with probability 1/3 (near -0.2, else near +0.2: :func:`split`) against one
+    that does not, overall and by how many of its three runs failed (what a reader sees)."""
+    lines = [f"| Welch, {MARL_RUNS} runs a kind | coverage of the 95 % interval |", "|---|---:|"]
+    for label, draw_a, draw_b, truth in WELCH_CASES:
+        rng = np.random.default_rng(MARL_RUNS)
+        a, b = draw_a(rng, (DRAWS, MARL_RUNS)), draw_b(rng, (DRAWS, MARL_RUNS))
+        ci = [stats.welch_difference(x, y)["ci"] for x, y in zip(a, b, strict=True)]
+        lines.append(f"| {label} | {np.mean([lo <= truth <= hi for lo, hi in ci]):.1%} |")
+    rng = np.random.default_rng(MARL_RUNS)
+    shape = (DRAWS, MARL_RUNS)
+    failed = rng.random(shape) < 1 / 3  # split()'s draws, in its order, keeping which runs failed
+    a = np.where(failed, rng.normal(-0.2, 0.1, shape), rng.normal(0.2, 0.05, shape))
+    b = rng.normal((2 * 0.2 - 0.2) / 3, 0.05, shape)
+    held = np.array(
+        [lo <= 0.0 <= hi for lo, hi in (stats.welch_difference(x, y)["ci"] for x, y in zip(a, b, strict=True))]
+    )
+    lines.append(f"| each run fails with probability 1/3, against normal sd 0.05 | {held.mean():.1%} |")
+    lines += ["", "| of the split learner's 3 runs, failed | share of the draws | coverage |", "|---:|---:|---:|"]
+    count = failed.sum(axis=1)
+    for k in range(MARL_RUNS + 1):
+        lines.append(f"| {k} | {np.mean(count == k):.1%} | {held[count == k].mean():.1%} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     print(coverage_markdown())
     welch_checks()
     rule_study_checks()
+    print()
+    print(marl_markdown())
     print("\n| median of attacks' gains, lognormal σ | values | percentile bootstrap (stats.median_interval) |")
     print("|---:|---:|---:|")
     for sigma in (0.3, 0.6):

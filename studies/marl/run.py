@@ -56,10 +56,8 @@ def stop(signum: int, frame: Any) -> None:
         process.send_signal(signal.SIGTERM)
 
 
-def run(command: list[str], quiet: bool = False) -> int:
-    """``command``'s exit status; SIGTERM passed on to it (:func:`stop`). ``quiet``: its stdout
-    (``train``'s progress line, redrawn many times a second) goes nowhere."""
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL if quiet else None)
+def run(command: list[str]) -> int:
+    process = subprocess.Popen(command)
     child[:] = [process]
     try:
         return process.wait()
@@ -88,7 +86,7 @@ def main() -> None:
         folder = args.work / "runs" / name
         if algorithm in OURS:
             log(args.work, f"{name}: training to {EPISODES} episodes")
-            train = ["train", "--resume"] if (folder / "checkpoint.pt").is_file() else [
+            train = ["train", "--resume", "--no-record"] if (folder / "checkpoint.pt").is_file() else [
                 *("train", "--condition", condition, "--predator", algorithm, "--preset", "reproduction"),
                 *("--episodes", str(EPISODES), "--seed", str(seed), "--no-record", "--force"),
             ]  # fmt: skip
@@ -98,7 +96,7 @@ def main() -> None:
             train = ["marl", "train", "--algorithm", algorithm, "--condition", condition, "--set", "evaluation=false"]
             train += ["--frames", str(FRAMES[condition]), "--seed", str(seed)]
             team = str(folder / "predator.safetensors")
-        code = run([*cli, *train, "--out", str(folder)], quiet=algorithm in OURS)
+        code = run([*cli, *train, "--out", str(folder)])
         if stopping or code != 0:
             log(args.work, f"{name}: {'stopped' if stopping else f'failed ({code})'}; rerun to resume")
             sys.exit(0 if stopping else 1)

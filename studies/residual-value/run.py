@@ -28,11 +28,9 @@ import argparse
 import dataclasses
 import datetime
 import gzip
-import hashlib
 import json
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -43,16 +41,14 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import design  # the study's fixed design, beside this file
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))  # the drivers' shared module alone
+import driver
+
+git, log, sweep = driver.git, driver.log, driver.sweep
+
 ROOT = Path(__file__).resolve().parents[2]
 WAITING = 3  # the exit status when only the rule study's runs are missing and --poll is 0
 PIN = Path(__file__).resolve().parent / "build.json"  # the study's build, once it started
-
-
-def log(work: Path, line: str) -> None:
-    stamped = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M:%S} {line}"
-    print(stamped, flush=True)
-    with (work / "progress.log").open("a") as file:
-        file.write(stamped + "\n")
 
 
 def record(marker: Path, seed_rule: dict[str, int] | None = None, floor: tuple[str, int] | None = None) -> None:
@@ -75,10 +71,6 @@ def record(marker: Path, seed_rule: dict[str, int] | None = None, floor: tuple[s
         atomic_write_text(marker, json.dumps(updated, indent=2) + "\n")
 
 
-def git(root: Path, *args: str) -> str:
-    return subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True).stdout
-
-
 def build() -> dict[str, str]:
     """This checkout's build (:func:`package_build`); refuses a package imported from another
     checkout than this one (PYTHONPATH)."""
@@ -96,13 +88,8 @@ def package_build(root: Path) -> dict[str, str]:
     study's driver computes it) and that of its training code (``training_code``,
     :func:`design.training_code`) in the checkout ``root``. Refuses uncommitted package code and
     training code other than the rule study's, naming the files that differ from its build's."""
-    dirty = git(root, "status", "--porcelain", "--", "pursuit_bench")
-    changed = [line for line in dirty.splitlines() if line.endswith(".py")]
-    if changed:
-        raise SystemExit(f"the package has uncommitted code changes ({changed[0].strip()} …): commit them first")
-    commit = git(root, "rev-parse", "HEAD").strip()
-    listed = git(root, "ls-files", "-s", "--", "pursuit_bench")
-    code = hashlib.sha256("\n".join(x for x in listed.splitlines() if x.endswith(".py")).encode()).hexdigest()[:16]
+    commit, listed = driver.committed_package(root)
+    code = driver.code_fingerprint(listed)
     files = design.training_files(git(root, "ls-tree", "-r", "HEAD", "--", "pursuit_bench"))
     training = design.training_code(files)
     if training != design.TRAINING_CODE:
@@ -142,18 +129,6 @@ def pin(path: Path, current: dict[str, str], results: Path, write: bool = True) 
     atomic_write_text(path, json.dumps({**current, "pinned": stamp}, indent=2) + "\n")
 
 
-def check_build(work: Path, current: dict[str, str]) -> None:
-    path = work / "study.json"
-    if path.exists():
-        started = json.loads(path.read_text())
-        if started["code"] != current["code"]:
-            raise SystemExit(
-                f"{path}: the study started with other code ({started['code']}); now {current['code']}: not mixed"
-            )
-    else:
-        path.write_text(json.dumps(current, indent=2) + "\n")
-
-
 # --- training -----------------------------------------------------------------------------------
 
 
@@ -177,20 +152,6 @@ def plan_for(setting: str, kinds: tuple[str, ...], first: int, seeds: int, args:
         keep_checkpoints=keep,
         obstacles=design.obstacles_of(setting),
     )
-
-
-def sweep(folder: Path, plan: Any, args: Any, stop: list[bool]) -> bool:
-    from pursuit_bench.training.sweep import open_sweep, run_sweep
-
-    note = open_sweep(folder, plan)
-    if note:
-        log(args.work, note)
-
-    def heard(kind: str, name: str, value: Any) -> None:
-        if kind == "done":
-            log(args.work, f"trained {name}")
-
-    return run_sweep(folder, plan, workers=args.workers, record=False, on_message=heard, should_stop=lambda: stop[0])
 
 
 # --- the population -----------------------------------------------------------------------------
@@ -278,7 +239,8 @@ def population(args: Any, stop: list[bool], settings: list[str], current: dict[s
             seeds = design.population_seeds(kind)
             folder = args.work / f"population-{setting}-{kind}"
             log(args.work, f"population of {setting}: {kind} prey, seeds {seeds.start}–{seeds.stop - 1}")
-            if not sweep(folder, plan_for(setting, (kind,), seeds.start, len(seeds), args, ()), args, stop):
+            plan = plan_for(setting, (kind,), seeds.start, len(seeds), args, ())
+            if not sweep(args.work, folder, plan, args.workers, stop):
                 return ["stop"]
     for setting in settings:
         if not (population_folder(args, setting) / "population.json").exists():
@@ -521,7 +483,7 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
             first += step  # judged already (its results committed): not trained again, on any machine
             continue
         log(args.work, f"{setting}: judged seeds {first}–{first + step - 1}, {', '.join(mine)} trained here")
-        if not sweep(folder, plan_for(setting, mine, first, step, args, keep), args, stop):
+        if not sweep(args.work, folder, plan_for(setting, mine, first, step, args, keep), args.workers, stop):
             return "stop"
         where = population_folder(args, setting)
         if not (where / "population.json").exists():
@@ -540,7 +502,7 @@ def judged(args: Any, stop: list[bool], setting: str, current: dict[str, str]) -
             }
             if None in found.values():  # gone with the machine, or seeds the rule study has not: trained here
                 log(args.work, f"{setting}: training hierarchical and flat runs the rule study's folders lack")
-                if not sweep(retrain, reference, args, stop):
+                if not sweep(args.work, retrain, reference, args.workers, stop):
                     return "stop"
             for (kind, seed), run in found.items():
                 name = f"{setting}-{kind}-seed{seed}"
@@ -652,16 +614,9 @@ def drive(args: Any, settings: list[str]) -> int:
     else:
         current = build()
         pin(PIN, current, args.results, write=args.preset == "reproduction" and args.budgets is None)
-    check_build(args.work, current)
+    driver.check_started(args.work, current)
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-    stop = [False]
-
-    def asked(signum: int, frame: Any) -> None:
-        stop[0] = True
-        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
-
-    signal.signal(signal.SIGTERM, asked)
-    signal.signal(signal.SIGINT, asked)
+    stop = driver.stop_flag(args.work)
     args.results.mkdir(parents=True, exist_ok=True)
     marker = args.results / "residual-study.json"  # what `pursuit-bench report` knows the folder by
     if not marker.exists():

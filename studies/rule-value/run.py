@@ -17,56 +17,25 @@ trained by another build is never mixed in): ``--work``/study.json holds the cod
 from __future__ import annotations
 
 import argparse
-import datetime
-import hashlib
 import json
 import os
-import signal
-import subprocess
 import sys
 from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))  # the drivers' shared module alone
+import driver  # noqa: E402
 
-
-def log(work: Path, line: str) -> None:
-    stamped = f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M:%S} {line}"
-    print(stamped, flush=True)
-    with (work / "progress.log").open("a") as file:
-        file.write(stamped + "\n")
+log, sweep = driver.log, driver.sweep
 
 
 def build() -> dict[str, str]:
     """The code that trains and evaluates: the commit, and a fingerprint of the package's tracked
     Python files (unchanged by committing results or the population's weights). Refuses
     uncommitted changes to the package's code."""
-    dirty = subprocess.run(
-        ["git", "status", "--porcelain", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
-    ).stdout
-    changed = [line for line in dirty.splitlines() if line.endswith(".py")]
-    if changed:
-        raise SystemExit(f"the package has uncommitted code changes ({changed[0].strip()} …): commit them first")
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
-    listed = subprocess.run(
-        ["git", "ls-files", "-s", "--", "pursuit_bench"], cwd=ROOT, capture_output=True, text=True, check=True
-    ).stdout
-    code = "\n".join(line for line in listed.splitlines() if line.endswith(".py"))
-    return {"commit": commit.strip(), "code": hashlib.sha256(code.encode()).hexdigest()[:16]}
-
-
-def check_build(work: Path, current: dict[str, str]) -> None:
-    path = work / "study.json"
-    if path.exists():
-        started = json.loads(path.read_text())
-        if started["code"] != current["code"]:
-            raise SystemExit(
-                f"{path}: the study started with other code (commit {started['commit'][:10]}, fingerprint "
-                f"{started['code']}); now {current['commit'][:10]} ({current['code']}). Its runs are not mixed: "
-                "check out that commit's package to go on, or start the study again in a new --work"
-            )
-    else:
-        path.write_text(json.dumps(current, indent=2) + "\n")
+    commit, listed = driver.committed_package(ROOT)
+    return {"commit": commit, "code": driver.code_fingerprint(listed)}
 
 
 def plan_for(kind: str, conditions: list[str], first: int, seeds: int, args: Any, keep: tuple[int, ...]) -> Any:
@@ -88,20 +57,6 @@ def plan_for(kind: str, conditions: list[str], first: int, seeds: int, args: Any
     )
 
 
-def sweep(folder: Path, plan: Any, args: Any, stop: list[bool]) -> bool:
-    from pursuit_bench.training.sweep import open_sweep, run_sweep
-
-    note = open_sweep(folder, plan)
-    if note:
-        log(args.work, note)
-
-    def heard(kind: str, name: str, value: Any) -> None:
-        if kind == "done":
-            log(args.work, f"trained {name}")
-
-    return run_sweep(folder, plan, workers=args.workers, record=False, on_message=heard, should_stop=lambda: stop[0])
-
-
 def population(args: Any, stop: list[bool], conditions: list[str], current: dict[str, str]) -> bool:
     try:  # this checkout's module paths; below, the pinned build's (before 0.2's redesign)
         from pursuit_bench.reports import rule_study
@@ -117,7 +72,9 @@ def population(args: Any, stop: list[bool], conditions: list[str], current: dict
         seeds = rule_study.population_seeds(kind)
         folder = args.work / f"population-{kind}"
         log(args.work, f"population: {kind} prey, seeds {seeds.start}–{seeds.stop - 1}, {len(conditions)} conditions")
-        if not sweep(folder, plan_for(kind, conditions, seeds.start, len(seeds), args, ()), args, stop):
+        if not sweep(
+            args.work, folder, plan_for(kind, conditions, seeds.start, len(seeds), args, ()), args.workers, stop
+        ):
             return False
     for condition in conditions:
         if (args.population / condition / "population.json").exists():
@@ -202,7 +159,7 @@ def judged(args: Any, stop: list[bool], conditions: list[str], current: dict[str
                 first += step  # judged already (its results committed): not trained again, on any machine
                 continue
             log(args.work, f"{condition}: judged seeds {first}–{first + step - 1}, both kinds")
-            if not sweep(folder, plan_for("both", [condition], first, step, args, keep), args, stop):
+            if not sweep(args.work, folder, plan_for("both", [condition], first, step, args, keep), args.workers, stop):
                 return False
             jobs = []
             for kind in rule_study.KINDS:
@@ -277,16 +234,12 @@ def main() -> int:
 def drive(args: Any, conditions: list[str]) -> int:
     """The study from where it stands: 0 once finished, 143 when stopped by a signal."""
     current = {"commit": "test", "code": "test"} if args.skip_build_check else build()
-    check_build(args.work, current)
+    driver.check_started(
+        args.work, current, "its runs are not mixed: check out that commit's package to go on, or start the study "
+        "again in a new --work"
+    )  # fmt: skip
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
-    stop = [False]
-
-    def asked(signum: int, frame: Any) -> None:
-        stop[0] = True
-        log(args.work, f"signal {signum}: stopping at the next safe point (checkpoints kept)")
-
-    signal.signal(signal.SIGTERM, asked)
-    signal.signal(signal.SIGINT, asked)
+    stop = driver.stop_flag(args.work)
     log(args.work, f"rule study: {', '.join(conditions)}; commit {current['commit'][:10]}, code {current['code']}")
     finished = population(args, stop, conditions, current) and judged(args, stop, conditions, current)
     log(args.work, "finished" if finished else "stopped: rerun the same command to resume")
