@@ -26,7 +26,8 @@ def report(where: Path, out: Path | None) -> None:
     On a pool study's folder (pool.json, from `pursuit-bench pool`): pool-report.json, pool.md, pool.png.
     On the rule study's folder (rule-study.json, runs/): rule-study-report.json, rule-study.md, rule-study.png.
     On the residual study's (residual-study.json, runs/): residual-study-report.json, .md and .png, its kinds
-    compared pairwise as residual-study.json names them."""
+    compared pairwise as residual-study.json names them. On the budget study's (budget-study.json, runs/):
+    budget-study-report.json and budget-study.md (interim, without verdicts, until all 6 panels are in)."""
     if not where.is_dir():  # before the statistics and the figures are imported: a refusal comes at once
         raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
     from pursuit_bench.reports import reproduction as reports
@@ -61,6 +62,18 @@ def report(where: Path, out: Path | None) -> None:
 
 def _report_residual_study(where: Path, out: Path) -> None:
     _report_rule_study(where, out, "residual-study")
+
+
+def _report_budget_study(where: Path, out: Path) -> None:
+    from pursuit_bench.reports import budget_report
+
+    try:
+        summary = budget_report.write_report(where, out)
+    except ValueError as error:
+        raise BadInput(str(error)) from None
+    state = "whole: verdicts written" if summary["whole_family"] else "interim: no verdicts until all 6 panels are in"
+    click.echo(f"budget study, conditions in: {', '.join(summary['complete'])} ({state})")
+    click.echo(f"written in {out}: budget-study-report.json, budget-study.md")
 
 
 def _report_pool(where: Path, out: Path) -> None:
@@ -147,4 +160,5 @@ FOLDERS: tuple[tuple[str, str, Callable[[Path, Path], None]], ...] = (
     ("pool.json", "a pool study", _report_pool),
     ("rule-study.json", "the rule study's results", _report_rule_study),
     ("residual-study.json", "the residual study's results", _report_residual_study),
+    ("budget-study.json", "the budget study's results", _report_budget_study),
 )

@@ -1,0 +1,366 @@
+"""The budget study's report (issue 63; studies/budget/PROTOCOL.md, fixed before any judged run was
+evaluated): what ``pursuit-bench report results/budget-study`` writes from the study's compact
+results (``runs/*.json.gz``, format ``budget-study-run-1``, written by studies/budget/evaluate.py).
+
+Primary: the pool return at 10^6 episodes against the 10^6-episode population, hierarchical −
+flat per panel (Welch), the two one-sided tests within ±0.05, Holm over the 6 panels, the four
+verdicts. Secondary, each labelled: the same at every other budget (each budget its own family),
+against the 15,000-episode population, the pool margin, failure shares, the paper's own
+comparison at 10^6 with the strict count per seed, the prey's wall rate against budget.
+
+A condition enters once both kinds hold all 10 judged seeds. **The families are the protocol's
+6 panels**: until every condition is in, each comparison is given with its own interval and
+unadjusted p, and no verdict and no Holm-adjusted p are written (a family tested in part is not
+the protocol's family).
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pursuit_bench import stats
+from pursuit_bench.io.files import atomic_write_text
+from pursuit_bench.reports import pool, rule_report, rule_study
+
+FORMAT = "budget-study-run-1"
+MARKER = "budget-study.json"
+#: The study's conditions (PROTOCOL.md, "Question"), in the order of the rule study's verdicts.
+CONDITIONS = ("3p-low-shared", "2p-high-shared", "1p-high")
+KINDS = rule_study.KINDS
+SEEDS = tuple(range(10))
+BUDGETS = (15_000, 50_000, 150_000, 500_000, 1_000_000)
+PANELS = 6  # 3 + 2 + 1 predators
+#: The failure margins (PROTOCOL.md, secondary 4): the rule study's, and below zero as the check.
+FAILURE_MARGINS = (rule_study.FAILURE_MARGIN, 0.0)
+
+
+def read_runs(where: Path) -> list[dict[str, Any]]:
+    """Every compact result under ``where/runs`` (ValueError naming a file of another format)."""
+    runs = []
+    for path in sorted((where / "runs").glob("*.json.gz")):
+        with gzip.open(path, "rt") as file:
+            run = json.load(file)
+        if run.get("format") != FORMAT:
+            raise ValueError(f"{path}: format {run.get('format')!r}, expected {FORMAT!r}")
+        runs.append(run)
+    return runs
+
+
+def complete(runs: list[dict[str, Any]]) -> tuple[list[str], dict[str, dict[str, int]]]:
+    """The conditions whose judged runs are all in (both kinds, seeds 0–9), and for the others the
+    runs each kind holds so far."""
+    done, waiting = [], {}
+    for condition in CONDITIONS:
+        held = {k: sorted(r["seed"] for r in runs if (r["condition"], r["kind"]) == (condition, k)) for k in KINDS}
+        if all(tuple(seeds) == SEEDS for seeds in held.values()):
+            done.append(condition)
+        else:
+            waiting[condition] = {k: len(seeds) for k, seeds in held.items()}
+    return done, waiting
+
+
+def evaluations(run: dict[str, Any], budget: int, population: str) -> dict[str, Any]:
+    """A run's evaluation at ``budget`` per member: against the population of the same budget
+    (``same``), or of the first budget (``first``; at the first budget they are one)."""
+    if population == "first" and budget != BUDGETS[0]:
+        return dict(run["first_population"][str(budget)])
+    return dict(run["same_budget"][str(budget)])
+
+
+def views(runs: list[dict[str, Any]], budget: int, population: str = "same") -> list[dict[str, Any]]:
+    """The runs as the rule study's reports read them: ``pool`` holding one budget's evaluations."""
+    return [
+        {
+            "kind": r["kind"],
+            "seed": r["seed"],
+            "condition": r["condition"],
+            "pool": {str(budget): evaluations(r, budget, population)},
+        }
+        for r in runs
+    ]
+
+
+def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVALENCE_MARGIN) -> dict[str, Any]:
+    """One family's rows (hierarchical and flat per-run values a panel) filled with the
+    difference (Welch) and the equivalence test; Holm and the verdicts only for the whole family
+    (``whole``), else marked interim."""
+    if whole:
+        return {"interim": False, "counts": pool.compare(rows, margin), "panels": rows}
+    for row in rows:
+        a, b = np.asarray(row[KINDS[0]]), np.asarray(row[KINDS[1]])
+        row["means"] = {KINDS[0]: float(a.mean()), KINDS[1]: float(b.mean())}
+        row["difference"] = stats.welch_difference(a, b)
+        row["equivalence"] = stats.equivalence(a, b, margin)
+    return {"interim": True, "panels": rows}
+
+
+def family(runs: list[dict[str, Any]], budget: int, key: str, population: str, whole: bool) -> dict[str, Any]:
+    """The panels' hierarchical − flat of the pool ``key`` (return or margin) at ``budget``."""
+    measure: Callable[[dict[str, Any], str], float] = lambda r, p: rule_study.pooled(r["pool"][str(budget)], p)[key]  # noqa: E731
+    return {"episodes": budget, **judged(rule_report.rows_of(views(runs, budget, population), measure), whole)}
+
+
+def failures(runs: list[dict[str, Any]], budget: int, margin: float, whole: bool) -> list[dict[str, Any]]:
+    """Failure shares at ``budget`` (a run fails in a panel when its pool margin there is below
+    ``margin``): per panel and kind with Wilson's interval, Boschloo's test of the two shares;
+    Holm over the panels only for the whole family."""
+    rows = rule_report.reliability(views(runs, budget), margin)
+    if not whole:
+        for row in rows:
+            row["difference"].pop("p_holm", None)
+    return rows
+
+
+def paper(runs: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVALENCE_MARGIN) -> dict[str, Any]:
+    """Secondary 5: at 10^6, each kind's learned predator against always-chase and always-stalk
+    with its own co-trained prey (paired by seed), the panel's verdict (Holm over the kind's
+    panels × 2 baselines, the whole family only), and the strict count per seed: in how many of
+    the kind's panels the learned predator's mean is the highest of the three."""
+    out: dict[str, Any] = {}
+    for kind in KINDS:
+        mine = sorted(
+            (r for r in runs if r["kind"] == kind), key=lambda r: (CONDITIONS.index(r["condition"]), r["seed"])
+        )
+        panels = [
+            (c, p)
+            for c in CONDITIONS
+            for p in sorted({p for r in mine if r["condition"] == c for p in r["paper"]["panels"]})
+        ]
+        rows = []
+        for condition, predator in panels:
+            cells = [r["paper"]["panels"][predator] for r in mine if r["condition"] == condition]
+            row: dict[str, Any] = {"condition": condition, "predator": predator, "against": {}}
+            for baseline in ("always_chase", "always_stalk"):
+                compared = stats.paired_difference([c["trained"] for c in cells], [c[baseline] for c in cells])
+                compared["p_equivalent"] = stats.paired_equivalence(compared["differences"], margin)["p"]
+                row["against"][baseline] = compared
+            rows.append(row)
+        tests = [c for row in rows for c in row["against"].values()]
+        if whole:
+            for key in ("p_greater", "p_less", "p_equivalent"):
+                for test, adjusted in zip(tests, stats.holm([t[key] for t in tests]), strict=True):
+                    test[f"{key}_holm"] = float(adjusted)
+            for row in rows:
+                row["verdict"] = stats.classify(row["against"])
+        seeds = sorted({r["seed"] for r in mine})
+        strict = {
+            str(s): sum(
+                all(
+                    r["paper"]["panels"][p]["trained"] > r["paper"]["panels"][p][b]
+                    for b in ("always_chase", "always_stalk")
+                )
+                for r in mine
+                if r["seed"] == s
+                for p in r["paper"]["panels"]
+            )
+            for s in seeds
+        }
+        out[kind] = {"panels": rows, "strict_count": strict, "of": len(panels)}
+    return out
+
+
+def wall_rates(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """Secondary 6 (descriptive): the share of episodes whose prey left the arena (``left_area``,
+    the trained variant's episodes), per condition, kind and budget: of the population's learned
+    members (averaged over them, then over the runs, with a t-interval over the runs), and at 10^6
+    of each run's co-trained prey (the paper's protocol's episodes)."""
+    out: dict[str, Any] = {}
+    for condition in CONDITIONS:
+        for kind in KINDS:
+            mine = [r for r in runs if (r["condition"], r["kind"]) == (condition, kind)]
+            if not mine:
+                continue
+            by_budget = {}
+            for budget in BUDGETS:
+                values = [
+                    float(
+                        np.mean(
+                            [
+                                m["prey"]["left_area"]
+                                for name, m in evaluations(r, budget, "same").items()
+                                if name != rule_study.FLEEING
+                            ]
+                        )
+                    )
+                    for r in mine
+                ]
+                by_budget[str(budget)] = {
+                    "mean": float(np.mean(values)),
+                    "ci": stats.t_interval(values),
+                    "runs": len(values),
+                }
+            own = [float(r["paper"]["prey"]["left_area"]) for r in mine]
+            out.setdefault(condition, {})[kind] = {
+                "population": by_budget,
+                "own_prey_at_end": {"mean": float(np.mean(own)), "ci": stats.t_interval(own), "runs": len(own)},
+            }
+    return out
+
+
+def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """Everything the report says, at full precision, over the conditions complete so far."""
+    if not runs:
+        raise ValueError("no judged runs: expected runs/*.json.gz in the study's folder")
+    done, waiting = complete(runs)
+    if not done:
+        raise ValueError(f"no condition has its 10 judged runs of both kinds yet (so far: {waiting})")
+    runs = [r for r in runs if r["condition"] in done]
+    whole = len(done) == len(CONDITIONS)
+    final = BUDGETS[-1]
+    return {
+        "study": "budget",
+        "protocol": "studies/budget/PROTOCOL.md",
+        "complete": done,
+        "in_progress": waiting,
+        "whole_family": whole,
+        "builds": sorted({r["build"] for r in runs}),
+        "evaluated_by": sorted({r["evaluated_by"] for r in runs}),
+        "primary": {
+            "measure": f"pool return at {final} episodes against the {final}-episode population",
+            **family(runs, final, "return", "same", whole),
+        },
+        "secondary": {
+            "budgets": [family(runs, b, "return", "same", whole) for b in BUDGETS[:-1]],
+            "first_population": [family(runs, b, "return", "first", whole) for b in BUDGETS[1:]],
+            "margin": [family(runs, b, "margin", "same", whole) for b in BUDGETS],
+            "failures": {
+                str(m): [{"episodes": b, "panels": failures(runs, b, m, whole)} for b in BUDGETS]
+                for m in FAILURE_MARGINS
+            },
+            "paper": paper(runs, whole),
+            "wall_rates": wall_rates(runs),
+        },
+    }
+
+
+def _num(value: float | None, spec: str = "+.3f") -> str:
+    return "–" if value is None or value != value else format(value, spec).replace("-", "−")
+
+
+def _p(value: float) -> str:
+    return "<0.001" if value < 0.001 else f"{value:.3f}"
+
+
+def family_markdown(entry: dict[str, Any]) -> list[str]:
+    """A family's table: one row a panel, hierarchical − flat with its interval; the Holm columns
+    and the verdict once the family is whole."""
+    whole = not entry["interim"]
+    head = "| panel | hierarchical | flat | hierarchical − flat [95 % CI] | p |"
+    head += " p (Holm) | equivalence p (Holm) | verdict |" if whole else ""
+    lines = [head, "|---|---:|---:|---:|---:|" + ("---:|---:|---|" if whole else "")]
+    for row in entry["panels"]:
+        d = row["difference"]
+        cells = [
+            f"{row['condition']} {row['predator']}",
+            _num(row["means"][KINDS[0]]),
+            _num(row["means"][KINDS[1]]),
+            f"{_num(d['mean'])} [{_num(d['ci'][0])}, {_num(d['ci'][1])}]",
+            _p(d["p"]),
+        ]
+        if whole:
+            cells += [_p(d["p_holm"]), _p(row["equivalence"]["p_holm"]), row["verdict"]]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def markdown(summary: dict[str, Any]) -> str:
+    """The report: the primary measure first, then each secondary, labelled."""
+    final = BUDGETS[-1]
+    out = ["# The budget study: does the answer at 15,000 episodes hold at 10^6?", ""]
+    running = [f"{c} ({n[KINDS[0]]} + {n[KINDS[1]]} of 10 + 10 runs)" for c, n in summary["in_progress"].items()]
+    out += [
+        f"Protocol: `{summary['protocol']}` (fixed before any judged run was evaluated). Conditions in: "
+        f"{', '.join(summary['complete'])}" + (f"; still running: {', '.join(running)}" if running else "") + ".",
+        "",
+    ]
+    if not summary["whole_family"]:
+        out += [
+            f"**Interim**: {len(summary['primary']['panels'])} of the protocol's {PANELS} panels. "
+            "Each comparison is given with its own interval and unadjusted p; the Holm-adjusted p-values and "
+            "the verdicts are written only once all 6 panels are in (a family tested in part is not the "
+            "protocol's family).",
+            "",
+        ]
+    out += [f"## Primary: {summary['primary']['measure']}", "", *family_markdown(summary["primary"]), ""]
+    if summary["whole_family"]:
+        out += ["Verdicts: " + ", ".join(f"{v} {n}" for v, n in summary["primary"]["counts"].items()) + ".", ""]
+    second = summary["secondary"]
+    for title, entries in (
+        ("every other budget, against the same-budget population (pool return)", second["budgets"]),
+        (
+            "against the 15,000-episode population (pool return; comparable with the rule study)",
+            second["first_population"],
+        ),
+        ("the pool margin (pool return − the better fixed mode), against the same-budget population", second["margin"]),
+    ):
+        out += [f"## Secondary: {title}", ""]
+        for entry in entries:
+            out += [f"At {entry['episodes']:,} episodes:", "", *family_markdown(entry), ""]
+    out += ["## Secondary: failure shares (a run fails in a panel when its pool margin is below the margin)", ""]
+    for margin, entries in second["failures"].items():
+        out += [
+            f"Margin {_num(float(margin), '+.2f')}:",
+            "",
+            "| episodes | panel | hierarchical failed | flat failed | Boschloo p |"
+            + (" p (Holm) |" if summary["whole_family"] else ""),
+            "|---:|---|---:|---:|---:|" + ("---:|" if summary["whole_family"] else ""),
+        ]
+        for entry in entries:
+            for row in entry["panels"]:
+                h, f, d = row[KINDS[0]], row[KINDS[1]], row["difference"]
+                cells = [f"{entry['episodes']:,}", f"{row['condition']} {row['predator']}"]
+                cells += [f"{s['failed']} of {s['runs']} [{s['ci'][0]:.2f}, {s['ci'][1]:.2f}]" for s in (h, f)]
+                cells += [_p(d["p"])] + ([_p(d["p_holm"])] if "p_holm" in d else [])
+                out.append("| " + " | ".join(cells) + " |")
+        out.append("")
+    out += [
+        f"## Secondary: the paper's own comparison at {final:,} episodes (own co-trained prey, 1000 episodes "
+        "a variant)",
+        "",
+    ]
+    for kind, entry in second["paper"].items():
+        out += [
+            f"{kind.capitalize()}: strict count per seed (of {entry['of']} panels): "
+            + ", ".join(f"seed {s}: {n}" for s, n in entry["strict_count"].items())
+            + ".",
+            "",
+        ]
+        out += ["| panel | − always-chase [95 % CI] | − always-stalk [95 % CI] | verdict |", "|---|---:|---:|---|"]
+        for row in entry["panels"]:
+            cells = [f"{row['condition']} {row['predator']}"]
+            for baseline in ("always_chase", "always_stalk"):
+                c = row["against"][baseline]
+                cells.append(
+                    f"{_num(c['mean'])} [{_num((c['ci'] or [None, None])[0])}, {_num((c['ci'] or [None, None])[1])}]"
+                )
+            cells.append(row.get("verdict", "– (interim)"))
+            out.append("| " + " | ".join(cells) + " |")
+        out.append("")
+    out += ["## Secondary: the prey's wall rate against budget (descriptive)", ""]
+    out += [
+        "| condition | predators | " + " | ".join(f"{b:,}" for b in BUDGETS) + " | own prey at 10^6 |",
+        "|---|---|" + "---:|" * (len(BUDGETS) + 1),
+    ]
+    for condition, kinds in second["wall_rates"].items():
+        for kind, entry in kinds.items():
+            cells = [f"{entry['population'][str(b)]['mean']:.3f}" for b in BUDGETS]
+            out.append(
+                f"| {condition} | {kind} | " + " | ".join(cells) + f" | {entry['own_prey_at_end']['mean']:.3f} |"
+            )
+    out.append("")
+    return "\n".join(out)
+
+
+def write_report(where: Path, out: Path) -> dict[str, Any]:
+    """From the study's folder: ``budget-study-report.json`` (full precision) and ``budget-study.md``."""
+    summary = summarise(read_runs(where))
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "budget-study-report.json", json.dumps(summary, indent=1) + "\n")
+    atomic_write_text(out / "budget-study.md", markdown(summary))
+    return summary

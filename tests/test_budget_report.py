@@ -1,0 +1,119 @@
+"""The budget study's report (pursuit_bench/reports/budget_report.py) on synthetic compact results
+with a known answer: where the hierarchical runs are better by a wide margin, worse, or the same,
+the verdicts say so once all six panels are in, and none is written before; the intervals are
+Welch's on the pool returns computed here by hand; the command reads the study's folder."""
+
+from __future__ import annotations
+
+import gzip
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from cli_helpers import run_cli
+from scipy import stats as scipy_stats
+
+from pursuit_bench.reports import budget_report
+
+PREDATORS = {"3p-low-shared": 3, "2p-high-shared": 2, "1p-high": 1}
+#: hierarchical − flat in each condition's pool return: the rule helps, the flat is better, no difference
+EFFECT = {"3p-low-shared": 0.2, "2p-high-shared": -0.2, "1p-high": 0.0}
+
+
+def trained_value(condition: str, kind: str, seed: int, budget: int, member: int) -> float:
+    rng = np.random.default_rng([list(PREDATORS).index(condition), int(kind == "flat"), seed, budget, member])
+    return 0.5 + (EFFECT[condition] if kind == "hierarchical" else 0.0) + float(rng.normal(0, 0.004))
+
+
+def members(condition: str, kind: str, seed: int, budget: int) -> dict[str, Any]:
+    out = {}
+    for m, name in enumerate(("FleeingPrey", "hierarchical-seed1000")):
+        value = trained_value(condition, kind, seed, budget, m)
+        out[name] = {
+            "panels": {f"predator_{p}": [value, 0.1, 0.2] for p in range(PREDATORS[condition])},
+            "stderr": {f"predator_{p}": 0.01 for p in range(PREDATORS[condition])},
+            "capture_rate": 0.9,
+            "prey": {"return": -0.9, "left_area": 0.1 * m, "captured": 0.9, "survived": 0.1},
+        }
+    return out
+
+
+def write_runs(folder: Path, skip: tuple[str, str, int] | None = None) -> None:
+    (folder / "runs").mkdir(parents=True)
+    for condition in PREDATORS:
+        for kind in ("hierarchical", "flat"):
+            for seed in range(10):
+                if (condition, kind, seed) == skip:
+                    continue
+                run = {
+                    "format": budget_report.FORMAT, "condition": condition, "kind": kind, "seed": seed,
+                    "build": "b", "evaluated_by": "e",
+                    "same_budget": {str(b): members(condition, kind, seed, b) for b in budget_report.BUDGETS},
+                    "first_population": {str(b): members(condition, kind, seed, b) for b in budget_report.BUDGETS[1:]},
+                    "paper": {
+                        "panels": {
+                            f"predator_{p}": {"trained": 0.6 + 0.01 * seed, "always_chase": 0.5, "always_stalk": 0.55}
+                            for p in range(PREDATORS[condition])
+                        },
+                        "prey": {"left_area": 0.05},
+                    },
+                }  # fmt: skip
+                with gzip.open(folder / "runs" / f"{condition}-{kind}-seed{seed}.json.gz", "wt") as file:
+                    json.dump(run, file)
+
+
+def pool_return(condition: str, kind: str, budget: int) -> list[float]:
+    return [float(np.mean([trained_value(condition, kind, s, budget, m) for m in (0, 1)])) for s in range(10)]
+
+
+def test_the_verdicts_are_the_known_answers_once_all_six_panels_are_in(tmp_path: Path) -> None:
+    write_runs(tmp_path)
+    summary = budget_report.summarise(budget_report.read_runs(tmp_path))
+    assert summary["whole_family"] and summary["complete"] == list(PREDATORS)
+    verdicts = {(r["condition"], r["predator"]): r["verdict"] for r in summary["primary"]["panels"]}
+    assert len(verdicts) == budget_report.PANELS
+    for (condition, _), verdict in verdicts.items():
+        assert (
+            verdict
+            == {"3p-low-shared": "rule helps", "2p-high-shared": "flat better", "1p-high": "equivalent"}[condition]
+        )
+    for row in summary["primary"]["panels"]:
+        h = pool_return(row["condition"], "hierarchical", 1_000_000)
+        f = pool_return(row["condition"], "flat", 1_000_000)
+        reference = scipy_stats.ttest_ind(h, f, equal_var=False)
+        assert row["difference"]["mean"] == pytest.approx(np.mean(h) - np.mean(f))
+        assert row["difference"]["p"] == pytest.approx(reference.pvalue)
+        assert "p_holm" in row["difference"]
+    # the paper's comparison: every run beats both fixed modes in every panel
+    for kind in ("hierarchical", "flat"):
+        paper = summary["secondary"]["paper"][kind]
+        assert set(paper["strict_count"].values()) == {budget_report.PANELS} and paper["of"] == budget_report.PANELS
+        assert {r["verdict"] for r in paper["panels"]} == {"better"}
+    walls = summary["secondary"]["wall_rates"]["1p-high"]["flat"]["population"]["15000"]
+    assert walls["mean"] == pytest.approx(0.1)  # FleeingPrey is not a learned member: the other's 0.1
+    text = budget_report.markdown(summary)
+    assert "Interim" not in text and "| verdict |" in text
+
+
+def test_with_a_run_missing_the_report_is_interim_without_verdicts(tmp_path: Path) -> None:
+    write_runs(tmp_path, skip=("1p-high", "flat", 9))
+    summary = budget_report.summarise(budget_report.read_runs(tmp_path))
+    assert not summary["whole_family"] and summary["in_progress"] == {"1p-high": {"hierarchical": 10, "flat": 9}}
+    rows = summary["primary"]["panels"]
+    assert len(rows) == 5 and all("verdict" not in r and "p_holm" not in r["difference"] for r in rows)
+    assert all("verdict" not in r for r in summary["secondary"]["paper"]["flat"]["panels"])
+    assert "**Interim**: 5 of the protocol's 6 panels" in budget_report.markdown(summary)
+
+
+def test_the_command_reads_the_study_s_folder_and_refuses_an_empty_one(tmp_path: Path) -> None:
+    write_runs(tmp_path / "study")
+    (tmp_path / "study" / budget_report.MARKER).write_text("{}\n")
+    code, output = run_cli("report", str(tmp_path / "study"), "--out", str(tmp_path / "out"))
+    assert code == 0 and "verdicts written" in output, output
+    assert (tmp_path / "out" / "budget-study.md").read_text().startswith("# The budget study")
+    (tmp_path / "empty" / "runs").mkdir(parents=True)
+    (tmp_path / "empty" / budget_report.MARKER).write_text("{}\n")
+    code, output = run_cli("report", str(tmp_path / "empty"))
+    assert code == 2 and "no judged runs" in output and len(output.strip().splitlines()) == 1, output
