@@ -20,6 +20,11 @@ from pursuit_bench.reports import budget_report
 PREDATORS = {"3p-low-shared": 3, "2p-high-shared": 2, "1p-high": 1}
 #: hierarchical − flat in each condition's pool return: the rule helps, the flat is better, no difference
 EFFECT = {"3p-low-shared": 0.2, "2p-high-shared": -0.2, "1p-high": 0.0}
+NAMES = (
+    "FleeingPrey",
+    *(f"hierarchical-seed{s}" for s in range(1000, 1004)),
+    *(f"flat-seed{s}" for s in range(1004, 1008)),
+)
 
 
 def trained_value(condition: str, kind: str, seed: int, budget: int, member: int) -> float:
@@ -29,13 +34,13 @@ def trained_value(condition: str, kind: str, seed: int, budget: int, member: int
 
 def members(condition: str, kind: str, seed: int, budget: int) -> dict[str, Any]:
     out = {}
-    for m, name in enumerate(("FleeingPrey", "hierarchical-seed1000")):
+    for m, name in enumerate(NAMES):
         value = trained_value(condition, kind, seed, budget, m)
         out[name] = {
             "panels": {f"predator_{p}": [value, 0.1, 0.2] for p in range(PREDATORS[condition])},
             "stderr": {f"predator_{p}": 0.01 for p in range(PREDATORS[condition])},
             "capture_rate": 0.9,
-            "prey": {"return": -0.9, "left_area": 0.1 * m, "captured": 0.9, "survived": 0.1},
+            "prey": {"return": -0.9, "left_area": 0.0 if m == 0 else 0.1, "captured": 0.9, "survived": 0.1},
         }
     return out
 
@@ -49,7 +54,8 @@ def write_runs(folder: Path, skip: tuple[str, str, int] | None = None) -> None:
                     continue
                 run = {
                     "format": budget_report.FORMAT, "condition": condition, "kind": kind, "seed": seed,
-                    "build": "b", "evaluated_by": "e",
+                    "build": "b", "evaluated_by": "e", "protocol": "crn-1", "episodes": 60, "eval_seed": 12345,
+                    "budgets": list(budget_report.BUDGETS),
                     "same_budget": {str(b): members(condition, kind, seed, b) for b in budget_report.BUDGETS},
                     "first_population": {str(b): members(condition, kind, seed, b) for b in budget_report.BUDGETS[1:]},
                     "paper": {
@@ -58,6 +64,7 @@ def write_runs(folder: Path, skip: tuple[str, str, int] | None = None) -> None:
                             for p in range(PREDATORS[condition])
                         },
                         "prey": {"left_area": 0.05},
+                        "episodes": 1000,
                     },
                 }  # fmt: skip
                 with gzip.open(folder / "runs" / f"{condition}-{kind}-seed{seed}.json.gz", "wt") as file:
@@ -65,7 +72,9 @@ def write_runs(folder: Path, skip: tuple[str, str, int] | None = None) -> None:
 
 
 def pool_return(condition: str, kind: str, budget: int) -> list[float]:
-    return [float(np.mean([trained_value(condition, kind, s, budget, m) for m in (0, 1)])) for s in range(10)]
+    return [
+        float(np.mean([trained_value(condition, kind, s, budget, m) for m in range(len(NAMES))])) for s in range(10)
+    ]
 
 
 def test_the_verdicts_are_the_known_answers_once_all_six_panels_are_in(tmp_path: Path) -> None:
@@ -92,7 +101,7 @@ def test_the_verdicts_are_the_known_answers_once_all_six_panels_are_in(tmp_path:
         assert set(paper["strict_count"].values()) == {budget_report.PANELS} and paper["of"] == budget_report.PANELS
         assert {r["verdict"] for r in paper["panels"]} == {"better"}
     walls = summary["secondary"]["wall_rates"]["1p-high"]["flat"]["population"]["15000"]
-    assert walls["mean"] == pytest.approx(0.1)  # FleeingPrey is not a learned member: the other's 0.1
+    assert walls["mean"] == pytest.approx(0.1)  # FleeingPrey (0) is not a learned member: the others' 0.1
     text = budget_report.markdown(summary)
     assert "Interim" not in text and "| verdict |" in text
 
@@ -117,3 +126,18 @@ def test_the_command_reads_the_study_s_folder_and_refuses_an_empty_one(tmp_path:
     (tmp_path / "empty" / budget_report.MARKER).write_text("{}\n")
     code, output = run_cli("report", str(tmp_path / "empty"))
     assert code == 2 and "no judged runs" in output and len(output.strip().splitlines()) == 1, output
+
+
+def test_a_result_made_with_other_settings_or_twice_is_refused_naming_the_file(tmp_path: Path) -> None:
+    write_runs(tmp_path)
+    path = tmp_path / "runs" / "1p-high-flat-seed3.json.gz"
+    with gzip.open(path, "rt") as file:
+        run = json.load(file)
+    with gzip.open(path, "wt") as file:
+        json.dump({**run, "episodes": 2}, file)  # the evaluation script's trial option
+    with pytest.raises(ValueError, match=r"1p-high-flat-seed3\.json\.gz: not the protocol's evaluation \(episodes"):
+        budget_report.read_runs(tmp_path)
+    with gzip.open(path, "wt") as file:
+        json.dump({**run, "seed": 4}, file)  # a second file of seed 4
+    with pytest.raises(ValueError, match="named otherwise than its run"):
+        budget_report.read_runs(tmp_path)

@@ -104,6 +104,36 @@ def test_decisions_are_torchs_even_where_actions_tie() -> None:
     assert np.array_equal(tied, everyone_tied)  # torch's own values, bit for bit
 
 
+def test_the_compiled_undecided_rows_are_numpys_expression_row_for_row() -> None:
+    """``undecided_kernel`` against the expression it replaced (the two best Q-values by numpy's
+    sort, :func:`decision_scale`, the comparison in float32), on rows with ties, rows at the
+    threshold to the last bit either side, and random rows of 1, 2 and 12 actions."""
+    from pursuit_bench.agents.dqn import DECISIVE_GAP, decision_scale
+    from pursuit_bench.agents.fused import undecided_kernel
+
+    def naive(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        if q.shape[1] == 1:
+            return np.zeros(len(q), dtype=bool)
+        top = np.sort(q, axis=-1)[:, -2:]
+        return top[:, 1] - top[:, 0] <= DECISIVE_GAP * decision_scale(q, v)
+
+    rng = np.random.default_rng(5)
+    gap = np.float32(DECISIVE_GAP)
+    for actions in (1, 2, 12):
+        q = rng.normal(0, 3, (4000, actions)).astype(np.float32)
+        v = rng.normal(0, 3, 4000).astype(np.float32)
+        if actions > 1:
+            q[:500, 0] = q[:500, 1] = q[:500].max(axis=1)  # the two best tied
+            scale = decision_scale(q, v)
+            edge = np.float32(DECISIVE_GAP) * scale[500:1500]  # a gap of exactly the threshold, and a bit above
+            q[500:1500, 1] = q[500:1500, :].max(axis=1) + edge
+            q[1000:1500, 1] = np.nextafter(q[1000:1500, 1], np.float32(np.inf))
+        expected = naive(q, v)
+        assert np.array_equal(undecided_kernel(q, v, gap), expected)
+        if actions > 1:
+            assert expected[:500].all() and 0 < expected[500:1500].sum() < 1000  # both sides of the edge met
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("condition", ["1p-high", "3p-high-shared"])
 def test_evaluation_by_the_fast_forward_pass_equals_torchs(condition: str, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -25,6 +25,7 @@ from pursuit_bench.agents.fused import (
     one_thread_for_scipys_blas,
     q_and_value_kernel,
     replay_update_kernel,
+    undecided_kernel,
     update_kernel,
 )
 from pursuit_bench.agents.generators import CompiledGenerators
@@ -143,14 +144,7 @@ class DQNLearner:
         wall = self.config.wall_features
         q_all, value_all = q_and_value_kernel(flat, self._offsets, self.n_actions, stacked, wall, member)
         q, value = q_all[0], value_all[0]
-        if self.n_actions == 1:
-            return q  # nothing to decide
-        if self.n_actions == 2:  # the two best are the two: their gap is |q1 - q0| (the same number)
-            gap = np.abs(q[:, 1] - q[:, 0])
-        else:
-            top = np.sort(q, axis=-1)[:, -2:]
-            gap = top[:, 1] - top[:, 0]
-        close = gap <= DECISIVE_GAP * decision_scale(q, value)
+        close = undecided_kernel(q, value, np.float32(DECISIVE_GAP))  # one compiled pass: the gap and the scale
         if not close.any():
             return q
         if parts is None:

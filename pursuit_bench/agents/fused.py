@@ -189,6 +189,34 @@ def q_and_value_kernel(flat, offsets, n_actions, obs, wall, first=0):
 
 
 @numba.njit(cache=True, error_model="numpy")
+def undecided_kernel(q, value, gap):
+    """Which rows (B,) of Q-values (B, A) and V(s) (B,), both float32, have their two best
+    actions within ``gap`` (a float32) times the row's decision scale, 1 + |V| + max |Q − V|
+    (``agents.dqn.decision_scale``): the numpy expression ``top2 − top1 <= gap · scale`` row by
+    row, in float32 as numpy computes it (one action: never undecided)."""
+    rows, actions = q.shape
+    out = np.zeros(rows, dtype=np.bool_)
+    one = np.float32(1.0)
+    for i in range(rows):
+        best = q[i, 0]
+        second = -np.inf
+        for a in range(1, actions):
+            x = q[i, a]
+            if x > best:
+                second = best
+                best = x
+            elif x > second:
+                second = x
+        v = value[i]
+        deviation = np.float32(0.0)
+        for a in range(actions):
+            deviation = max(deviation, abs(q[i, a] - v))
+        scale = one + abs(v) + deviation
+        out[i] = actions > 1 and np.float32(best - second) <= gap * scale
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")
 def choose_kernel(q, uniforms, randoms, epsilon):
     """Actions (M, B) from Q-values (M, B, A): each row's first largest Q, or where
     ``uniforms[m, b] < epsilon`` the action ``randoms[m, b]`` (ε-greedy: the draws come from the

@@ -40,15 +40,38 @@ PANELS = 6  # 3 + 2 + 1 predators
 FAILURE_MARGINS = (rule_study.FAILURE_MARGIN, 0.0)
 
 
+#: What every judged run's compact result must hold (PROTOCOL.md, "Evaluation"): a file made with
+#: other settings (the evaluation script's trial options) is refused, not averaged in.
+SETTINGS = {"protocol": "crn-1", "episodes": 60, "eval_seed": 12345, "budgets": list(BUDGETS)}
+PAPER_EPISODES = 1000
+MEMBERS = 9  # FleeingPrey and 8 learned prey a population
+
+
 def read_runs(where: Path) -> list[dict[str, Any]]:
-    """Every compact result under ``where/runs`` (ValueError naming a file of another format)."""
-    runs = []
+    """Every compact result under ``where/runs``, checked against the protocol's settings: its
+    format, name, condition, kind, seed (0–9, each run once), evaluation settings, budgets and
+    population size, one training build for all; ValueError naming the file otherwise."""
+    runs, seen = [], set()
     for path in sorted((where / "runs").glob("*.json.gz")):
         with gzip.open(path, "rt") as file:
             run = json.load(file)
+        key = (run.get("condition"), run.get("kind"), run.get("seed"))
+        wrong = [k for k, v in SETTINGS.items() if run.get(k) != v]
         if run.get("format") != FORMAT:
             raise ValueError(f"{path}: format {run.get('format')!r}, expected {FORMAT!r}")
+        if key[0] not in CONDITIONS or key[1] not in KINDS or key[2] not in SEEDS:
+            raise ValueError(f"{path}: {key} is not a judged run of the study (its conditions, kinds, seeds 0–9)")
+        if path.name != f"{key[0]}-{key[1]}-seed{key[2]}.json.gz" or key in seen:
+            raise ValueError(f"{path}: named otherwise than its run {key}, or a second file of it")
+        if wrong or run["paper"].get("episodes") != PAPER_EPISODES:
+            raise ValueError(f"{path}: not the protocol's evaluation ({', '.join(wrong) or 'paper episodes'} differ)")
+        if any(len(run["same_budget"][str(b)]) != MEMBERS for b in BUDGETS):
+            raise ValueError(f"{path}: a population of other than {MEMBERS} members")
+        seen.add(key)
         runs.append(run)
+    builds = {r["build"] for r in runs}
+    if len(builds) > 1:
+        raise ValueError(f"{where}: runs trained by {len(builds)} builds ({', '.join(sorted(builds))}): not mixed")
     return runs
 
 
@@ -91,6 +114,8 @@ def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVA
     difference (Welch) and the equivalence test; Holm and the verdicts only for the whole family
     (``whole``), else marked interim."""
     if whole:
+        if len(rows) != PANELS:
+            raise ValueError(f"the family has {len(rows)} panels, the protocol's {PANELS}")
         return {"interim": False, "counts": pool.compare(rows, margin), "panels": rows}
     for row in rows:
         a, b = np.asarray(row[KINDS[0]]), np.asarray(row[KINDS[1]])
@@ -152,7 +177,7 @@ def paper(runs: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVAL
         strict = {
             str(s): sum(
                 all(
-                    r["paper"]["panels"][p]["trained"] > r["paper"]["panels"][p][b]
+                    r["paper"]["panels"][p]["trained"] > r["paper"]["panels"][p][b] + stats.TIE
                     for b in ("always_chase", "always_stalk")
                 )
                 for r in mine
@@ -222,12 +247,12 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
         "builds": sorted({r["build"] for r in runs}),
         "evaluated_by": sorted({r["evaluated_by"] for r in runs}),
         "primary": {
-            "measure": f"pool return at {final} episodes against the {final}-episode population",
+            "measure": f"pool return at {final:,} episodes against the {final:,}-episode population",
             **family(runs, final, "return", "same", whole),
         },
         "secondary": {
             "budgets": [family(runs, b, "return", "same", whole) for b in BUDGETS[:-1]],
-            "first_population": [family(runs, b, "return", "first", whole) for b in BUDGETS[1:]],
+            "first_population": [family(runs, b, "return", "first", whole) for b in BUDGETS],
             "margin": [family(runs, b, "margin", "same", whole) for b in BUDGETS],
             "failures": {
                 str(m): [{"episodes": b, "panels": failures(runs, b, m, whole)} for b in BUDGETS]
@@ -243,6 +268,12 @@ def _num(value: float | None, spec: str = "+.3f") -> str:
     return "–" if value is None or value != value else format(value, spec).replace("-", "−")
 
 
+def _share(entry: dict[str, Any]) -> str:
+    """A mean over runs with its t-interval and the number of runs."""
+    low, high = entry["ci"] or [None, None]
+    return f"{entry['mean']:.3f} [{_num(low, '.3f')}, {_num(high, '.3f')}] ({entry['runs']})"
+
+
 def _p(value: float) -> str:
     return "<0.001" if value < 0.001 else f"{value:.3f}"
 
@@ -251,9 +282,9 @@ def family_markdown(entry: dict[str, Any]) -> list[str]:
     """A family's table: one row a panel, hierarchical − flat with its interval; the Holm columns
     and the verdict once the family is whole."""
     whole = not entry["interim"]
-    head = "| panel | hierarchical | flat | hierarchical − flat [95 % CI] | p |"
+    head = "| panel | hierarchical | flat | hierarchical − flat [95 % CI] | p | equivalence p (±0.05) |"
     head += " p (Holm) | equivalence p (Holm) | verdict |" if whole else ""
-    lines = [head, "|---|---:|---:|---:|---:|" + ("---:|---:|---|" if whole else "")]
+    lines = [head, "|---|---:|---:|---:|---:|---:|" + ("---:|---:|---|" if whole else "")]
     for row in entry["panels"]:
         d = row["difference"]
         cells = [
@@ -262,6 +293,7 @@ def family_markdown(entry: dict[str, Any]) -> list[str]:
             _num(row["means"][KINDS[1]]),
             f"{_num(d['mean'])} [{_num(d['ci'][0])}, {_num(d['ci'][1])}]",
             _p(d["p"]),
+            _p(row["equivalence"]["p"]),
         ]
         if whole:
             cells += [_p(d["p_holm"]), _p(row["equivalence"]["p_holm"]), row["verdict"]]
@@ -331,14 +363,20 @@ def markdown(summary: dict[str, Any]) -> str:
             + ".",
             "",
         ]
-        out += ["| panel | − always-chase [95 % CI] | − always-stalk [95 % CI] | verdict |", "|---|---:|---:|---|"]
+        suffix = " (Holm)" if summary["whole_family"] else ""
+        out += [
+            f"| panel | − always-chase [95 % CI] | ahead, behind, equivalent p{suffix} | − always-stalk [95 % CI] "
+            f"| ahead, behind, equivalent p{suffix} | verdict |",
+            "|---|---:|---|---:|---|---|",
+        ]
         for row in entry["panels"]:
             cells = [f"{row['condition']} {row['predator']}"]
             for baseline in ("always_chase", "always_stalk"):
                 c = row["against"][baseline]
-                cells.append(
-                    f"{_num(c['mean'])} [{_num((c['ci'] or [None, None])[0])}, {_num((c['ci'] or [None, None])[1])}]"
-                )
+                low, high = c["ci"] or [None, None]
+                cells.append(f"{_num(c['mean'])} [{_num(low)}, {_num(high)}]")
+                keys = [f"{k}_holm" if suffix else k for k in ("p_greater", "p_less", "p_equivalent")]
+                cells.append(", ".join(_p(c[k]) for k in keys))
             cells.append(row.get("verdict", "– (interim)"))
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
@@ -349,10 +387,8 @@ def markdown(summary: dict[str, Any]) -> str:
     ]
     for condition, kinds in second["wall_rates"].items():
         for kind, entry in kinds.items():
-            cells = [f"{entry['population'][str(b)]['mean']:.3f}" for b in BUDGETS]
-            out.append(
-                f"| {condition} | {kind} | " + " | ".join(cells) + f" | {entry['own_prey_at_end']['mean']:.3f} |"
-            )
+            cells = [_share(entry["population"][str(b)]) for b in BUDGETS]
+            out.append(f"| {condition} | {kind} | " + " | ".join(cells) + f" | {_share(entry['own_prey_at_end'])} |")
     out.append("")
     return "\n".join(out)
 
