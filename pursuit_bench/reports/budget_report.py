@@ -26,7 +26,7 @@ import numpy as np
 
 from pursuit_bench import stats
 from pursuit_bench.io.files import atomic_write_text
-from pursuit_bench.reports import pool, rule_report, rule_study
+from pursuit_bench.reports import pool, reproduction, rule_report, rule_study
 
 FORMAT = "budget-study-run-1"
 MARKER = "budget-study.json"
@@ -113,15 +113,13 @@ def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVA
     """One family's rows (hierarchical and flat per-run values a panel) filled with the
     difference (Welch) and the equivalence test; Holm and the verdicts only for the whole family
     (``whole``), else marked interim."""
+    if whole and len(rows) != PANELS:
+        raise ValueError(f"the family has {len(rows)} panels, the protocol's {PANELS}")
+    counts = pool.compare(rows, margin)
     if whole:
-        if len(rows) != PANELS:
-            raise ValueError(f"the family has {len(rows)} panels, the protocol's {PANELS}")
-        return {"interim": False, "counts": pool.compare(rows, margin), "panels": rows}
-    for row in rows:
-        a, b = np.asarray(row[KINDS[0]]), np.asarray(row[KINDS[1]])
-        row["means"] = {KINDS[0]: float(a.mean()), KINDS[1]: float(b.mean())}
-        row["difference"] = stats.welch_difference(a, b)
-        row["equivalence"] = stats.equivalence(a, b, margin)
+        return {"interim": False, "counts": counts, "panels": rows}
+    for row in rows:  # a family tested in part: its Holm and verdicts are not the protocol's
+        del row["difference"]["p_holm"], row["equivalence"]["p_holm"], row["verdict"]
     return {"interim": True, "panels": rows}
 
 
@@ -160,19 +158,16 @@ def paper(runs: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVAL
         rows = []
         for condition, predator in panels:
             cells = [r["paper"]["panels"][predator] for r in mine if r["condition"] == condition]
-            row: dict[str, Any] = {"condition": condition, "predator": predator, "against": {}}
-            for baseline in ("always_chase", "always_stalk"):
-                compared = stats.paired_difference([c["trained"] for c in cells], [c[baseline] for c in cells])
+            paired = {
+                b: stats.paired_difference([c["trained"] for c in cells], [c[b] for c in cells])
+                for b in ("always_chase", "always_stalk")
+            }
+            rows.append({"condition": condition, "predator": predator, "paired": paired})
+        if whole:  # REPRODUCTION.md's judgement of the paper's claim: Holm, then the panel's verdict
+            reproduction.judge(rows, margin=margin)
+        else:
+            for compared in (c for row in rows for c in row["paired"].values()):
                 compared["p_equivalent"] = stats.paired_equivalence(compared["differences"], margin)["p"]
-                row["against"][baseline] = compared
-            rows.append(row)
-        tests = [c for row in rows for c in row["against"].values()]
-        if whole:
-            for key in ("p_greater", "p_less", "p_equivalent"):
-                for test, adjusted in zip(tests, stats.holm([t[key] for t in tests]), strict=True):
-                    test[f"{key}_holm"] = float(adjusted)
-            for row in rows:
-                row["verdict"] = stats.classify(row["against"])
         seeds = sorted({r["seed"] for r in mine})
         strict = {
             str(s): sum(
@@ -372,7 +367,7 @@ def markdown(summary: dict[str, Any]) -> str:
         for row in entry["panels"]:
             cells = [f"{row['condition']} {row['predator']}"]
             for baseline in ("always_chase", "always_stalk"):
-                c = row["against"][baseline]
+                c = row["paired"][baseline]
                 low, high = c["ci"] or [None, None]
                 cells.append(f"{_num(c['mean'])} [{_num(low)}, {_num(high)}]")
                 keys = [f"{k}_holm" if suffix else k for k in ("p_greater", "p_less", "p_equivalent")]
