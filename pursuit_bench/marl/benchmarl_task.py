@@ -1,5 +1,7 @@
 """pursuit-bench as a BenchMARL task: its ten conditions through BenchMARL's own extension point
-(a ``TaskClass`` and a ``Task`` enum), the env wrapped by TorchRL's ``PettingZooWrapper``.
+(a ``TaskClass`` and a ``Task`` enum), the env one batched TorchRL env of BenchMARL's
+``num_envs`` arenas (``torchrl_env.py``: what TorchRL's ``PettingZooWrapper`` gives for as many
+single envs, bit for bit, at about a tenth of the CPU).
 
 Two groups, ``predator`` (1–3 agents) and ``prey`` (1): BenchMARL trains every group of a task,
 so the prey learns beside the predators, as the paper's learned runs have it. A predator acts by
@@ -16,7 +18,6 @@ the centralised critics (MAPPO) and mixers (QMIX) read. Episodes end for all at 
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Callable
 from typing import Any
 
@@ -27,11 +28,20 @@ from torchrl.envs import EnvBase, PettingZooWrapper
 from pursuit_bench.env.conditions import CONDITIONS
 from pursuit_bench.env.joint_actions import JointActionParallelEnv
 from pursuit_bench.env.pettingzoo_env import parallel_env
+from pursuit_bench.marl.torchrl_env import PursuitTorchRLEnv
 
 PREFIX = "PURSUIT_"
-#: Env ``i`` made by a task of experiment seed ``s`` is seeded ``SEED_STRIDE * s + i``: distinct
-#: across the envs of a run and across the seeds of a study (up to this many envs a run).
+#: Arena ``i`` of a task of experiment seed ``s`` is seeded ``SEED_STRIDE * s + 1 + i``: distinct
+#: across the arenas of a run and across the seeds of a study (up to this many arenas a run).
 SEED_STRIDE = 1000
+
+
+def first_seeds(seed: int, num_envs: int) -> list[int]:
+    """The arenas' seeds of a run of experiment seed ``seed``. The rows trained before the task was
+    vectorized ran ``SerialEnv`` over :func:`make_env` envs made by one counting function, whose
+    first env (seed ``SEED_STRIDE * seed``) only gave TorchRL the specs; the envs that trained
+    were the next ``num_envs``: these seeds, so that those rows train again exactly as they did."""
+    return [SEED_STRIDE * seed + 1 + i for i in range(num_envs)]
 
 
 def task_name(condition: str) -> str:
@@ -59,7 +69,9 @@ def _only(spec: Composite, groups: list[str], key: str) -> Composite:
 
 
 def make_env(condition: str, seed: int | None, device: Any, **options: Any) -> EnvBase:
-    """One env of ``condition`` as TorchRL sees it (joint predator actions, the global state)."""
+    """One env of ``condition`` through TorchRL's ``PettingZooWrapper`` (joint predator actions,
+    the global state): the library's generic path, which the batched env reproduces arena for
+    arena (``torchrl_env.py``, tested against it)."""
     wrapped = JointActionParallelEnv(parallel_env(condition, **options))
     return PettingZooWrapper(
         wrapped, categorical_actions=True, return_state=True, use_mask=False, seed=seed, device=device
@@ -73,12 +85,12 @@ class PursuitTaskClass(TaskClass):
         self, num_envs: int, continuous_actions: bool, seed: int | None, device: Any
     ) -> Callable[[], EnvBase]:
         condition, options = condition_of(self.name), dict(self.config)
-        made = itertools.count()  # BenchMARL builds its num_envs training envs from this one function
+        seeds = list(range(num_envs)) if seed is None else first_seeds(seed, num_envs)
 
-        def one() -> EnvBase:  # each env its own seed: one seed for all gave every env the same starts
-            return make_env(condition, None if seed is None else SEED_STRIDE * seed + next(made), device, **options)
+        def batched() -> EnvBase:  # vectorized: BenchMARL steps it as one env (no SerialEnv of num_envs)
+            return PursuitTorchRLEnv(condition, seeds, device, **options)
 
-        return one
+        return batched
 
     def supports_continuous_actions(self) -> bool:
         return False
@@ -96,19 +108,19 @@ class PursuitTaskClass(TaskClass):
         return dict(env.group_map)
 
     def observation_spec(self, env: EnvBase) -> Composite:
-        return _only(env.observation_spec, list(self.group_map(env)), "observation")
+        return _only(env.full_observation_spec_unbatched, list(self.group_map(env)), "observation")
 
     def info_spec(self, env: EnvBase) -> Composite | None:
-        return _only(env.observation_spec, list(self.group_map(env)), "info")
+        return _only(env.full_observation_spec_unbatched, list(self.group_map(env)), "info")
 
     def state_spec(self, env: EnvBase) -> Composite | None:
-        return Composite({"state": env.observation_spec["state"].clone()})
+        return Composite({"state": env.full_observation_spec_unbatched["state"].clone()})
 
     def action_mask_spec(self, env: EnvBase) -> Composite | None:
         return None
 
     def action_spec(self, env: EnvBase) -> Composite:
-        return env.full_action_spec
+        return env.full_action_spec_unbatched
 
     @staticmethod
     def env_name() -> str:

@@ -1,0 +1,250 @@
+"""pursuit-bench as one batched TorchRL env: B arenas of a condition stepped together by the
+batched core, with the keys, specs and values that TorchRL's ``PettingZooWrapper`` gives for B
+single envs stacked by a ``SerialEnv`` (``benchmarl_task.make_env``), arena for arena and bit for
+bit (``tests/test_marl_torchrl_env.py`` compares them step by step).
+
+Why: BenchMARL runs a task that is not vectorized as ``SerialEnv`` over its envs, and that path
+cost about 4 ms of CPU per env step here (TensorDict bookkeeping per env and per agent), more
+than the learning; a vectorized task is stepped as one env (BenchMARL's own rule: an env whose
+``batch_size`` is not empty is taken as it is). The predators act by one of 24 joint actions
+(``env/joint_actions.py``), the prey by its 12 directions.
+
+Arena ``i`` plays what a single PettingZoo env seeded ``seeds[i]`` plays once wrapped: the wrapper
+resets its env with the seed when it is built (a start drawn and never played), and each later
+reset draws the next start from the same generator. Episodes end for all agents at once; an
+ended arena waits for TorchRL's partial reset (``_reset``), as the wrapped envs do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import torch
+from tensordict import TensorDict, TensorDictBase
+from torchrl.data import Bounded, Categorical, Composite, Unbounded
+from torchrl.envs import EnvBase
+
+from pursuit_bench.env import task
+from pursuit_bench.env.agent_spaces import POSITION_BOUND, VELOCITY_BOUND, observation_bounds
+from pursuit_bench.env.conditions import OBSTACLE_RADII, TaskConfig, resolve_condition
+from pursuit_bench.env.core import PursuitCore
+from pursuit_bench.env.joint_actions import N_JOINT
+from pursuit_bench.env.world import Backend
+
+#: The info entries of each group, in the order the PettingZoo env's infos hold them.
+PREDATOR_INFO = ("captured", "left_area", "mode", "distance_to_prey")
+PREY_INFO = ("captured", "left_area", "distance_to_prey")
+
+
+class PursuitTorchRLEnv(EnvBase):
+    """``len(seeds)`` arenas of ``condition`` as one TorchRL env of batch size ``(len(seeds),)``.
+
+    Args:
+        condition: one of the ten conditions, or None with the options.
+        seeds: one seed per arena (the seed its wrapped single env would be given).
+        device: where the tensors live (the arenas run on the CPU).
+        backend: the physics, ``"pymunk"`` (the reference) or ``"numpy"``.
+        **options: the task's options (``max_steps``, ``wall_rule``, ``obstacles`` …).
+
+    Groups ``predator`` (the predators, joint actions 0..23) and ``prey`` (one agent, 0..11);
+    per group ``observation``, ``info`` (``captured``, ``left_area``, the predators' ``mode``
+    (-1 at a reset), ``distance_to_prey``), ``reward``, ``done``, ``terminated``, ``truncated``;
+    at the root the global ``state`` and the episode's ``done``, ``terminated``, ``truncated``.
+    """
+
+    def __init__(
+        self,
+        condition: str | None,
+        seeds: Sequence[int],
+        device: Any = "cpu",
+        *,
+        backend: Backend = "pymunk",
+        **options: Any,
+    ) -> None:
+        if not len(seeds):
+            raise ValueError("seeds: expected one seed per arena, got none")
+        config: TaskConfig = resolve_condition(condition, **options)
+        if config.continuous:
+            raise ValueError("the TorchRL env plays the discrete task: make it with continuous=False")
+        arenas = len(seeds)
+        super().__init__(batch_size=torch.Size([arenas]), device=device)
+        self.config = config
+        self.condition = condition
+        names = list(config.agent_names)
+        self.group_map = {"predator": names[:-1], "prey": names[-1:]}
+        self._n_pred = config.n_predators
+        self._arenas = np.arange(arenas)
+        self._core = PursuitCore(config, arenas, backend=backend, blocks=[1] * arenas)
+        self._obs_size = task.obs_size(config.n_agents, config.obstacles > 0)
+        self._rngs = [np.random.default_rng(int(seed)) for seed in seeds]
+        self._core.reset(self._arenas, self._rngs)  # the wrapper's reset with the seed when it is built
+        self._make_specs()
+
+    def _make_specs(self) -> None:
+        b, config = self.batch_size, self.config
+        low, high = (torch.from_numpy(v) for v in observation_bounds(config.n_agents, config.obstacles > 0))
+        state_bound = np.array(  # the PettingZoo env's state space
+            ([POSITION_BOUND] * 2 + [VELOCITY_BOUND] * 2) * config.n_agents
+            + [POSITION_BOUND, POSITION_BOUND, OBSTACLE_RADII[1]] * config.obstacles,
+            dtype=np.float32,
+        )
+        device, flags = self.device, ("done", "terminated", "truncated")
+        observation, action, reward, done = {}, {}, {}, {}
+        for group, agents in self.group_map.items():
+            k = len(agents)
+            shape = torch.Size([*b, k])
+            info = PREDATOR_INFO if group == "predator" else PREY_INFO
+            observation[group] = Composite(
+                observation=Bounded(
+                    low=low.expand(*shape, -1),
+                    high=high.expand(*shape, -1),
+                    shape=(*shape, len(low)),
+                    dtype=torch.float32,
+                    device=self.device,
+                ),
+                info=Composite(
+                    {key: Unbounded(shape=shape, device=device) for key in info}, shape=shape, device=device
+                ),
+                shape=shape,
+                device=self.device,
+            )
+            action[group] = Composite(
+                action=Categorical(
+                    n=N_JOINT if group == "predator" else task.N_DIRECTIONS, shape=shape, device=self.device
+                ),
+                shape=shape,
+                device=self.device,
+            )
+            reward[group] = Composite(reward=Unbounded(shape=(*shape, 1), device=device), shape=shape, device=device)
+            done[group] = Composite(
+                {key: Categorical(n=2, shape=(*shape, 1), device=device, dtype=torch.bool) for key in flags},
+                shape=shape,
+                device=self.device,
+            )
+        bound = torch.from_numpy(state_bound)
+        self.observation_spec = Composite(
+            **observation,
+            state=Bounded(
+                low=-bound.expand(*b, -1),
+                high=bound.expand(*b, -1),
+                shape=(*b, len(bound)),
+                dtype=torch.float32,
+                device=self.device,
+            ),
+            shape=b,
+            device=self.device,
+        )
+        self.action_spec = Composite(**action, shape=b, device=self.device)
+        self.reward_spec = Composite(**reward, shape=b, device=self.device)
+        self.done_spec = Composite(
+            **done,
+            **{key: Categorical(n=2, shape=(*b, 1), device=device, dtype=torch.bool) for key in flags},
+            shape=b,
+            device=self.device,
+        )
+
+    def _set_seed(self, seed: int | None) -> None:
+        """Arena ``i`` from then on draws from a generator seeded ``seed + i``, its next start
+        drawn now (as the wrapped env's reset with a seed does)."""
+        if seed is not None:
+            self._rngs = [np.random.default_rng(seed + i) for i in range(len(self._rngs))]
+            self._core.reset(self._arenas, self._rngs)
+
+    def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
+        mask = self._reset_mask(tensordict)
+        arenas = self._arenas[mask]
+        obs = np.zeros((len(self._arenas), self.config.n_agents, self._obs_size), np.float32)
+        obs[arenas] = self._core.reset(arenas, [self._rngs[i] for i in arenas.tolist()])
+        z = task.as_complex(self._core.world.positions)
+        gaps = np.abs(z[:, :-1] - z[:, -1:])
+        distance = np.concatenate([gaps, gaps.min(axis=1, keepdims=True)], axis=1)
+        no = np.zeros((len(self._arenas), self.config.n_agents), dtype=bool)
+        modes = np.full((len(self._arenas), self._n_pred), -1)
+        out = self._observations(obs, no[:, :-1], no, modes, distance)
+        falses = torch.zeros((*self.batch_size, 1), dtype=torch.bool, device=self.device)
+        for group, agents in self.group_map.items():
+            flags = torch.zeros((*self.batch_size, len(agents), 1), dtype=torch.bool, device=self.device)
+            for key in ("done", "terminated", "truncated"):
+                out[group][key] = flags.clone()
+        for key in ("done", "terminated", "truncated"):
+            out[key] = falses.clone()
+        return TensorDict(out, batch_size=self.batch_size, device=self.device)
+
+    def _reset_mask(self, tensordict: TensorDictBase | None) -> np.ndarray:
+        """Which arenas to reset: those any ``_reset`` entry names (all when none is given)."""
+        if tensordict is None:
+            return np.ones(len(self._arenas), dtype=bool)
+        flags = [tensordict.get(key, None) for key in ("_reset", ("predator", "_reset"), ("prey", "_reset"))]
+        given = [f.reshape(len(self._arenas), -1).any(-1) for f in flags if f is not None]
+        if not given:
+            return np.ones(len(self._arenas), dtype=bool)
+        mask = given[0]
+        for more in given[1:]:
+            mask = mask | more
+        return mask.cpu().numpy()
+
+    def _observations(
+        self, obs: np.ndarray, prey_contact: np.ndarray, wall: np.ndarray, modes: np.ndarray, distance: np.ndarray
+    ) -> dict[str, Any]:
+        """The groups' observations and infos and the global state, as tensors."""
+        n = self._n_pred
+        device = self.device
+
+        def t(a: np.ndarray) -> torch.Tensor:
+            return torch.as_tensor(np.ascontiguousarray(a, dtype=np.float32), device=device)
+
+        b = self.batch_size
+        predator = TensorDict(
+            observation=t(obs[:, :n]),
+            info=TensorDict(
+                captured=t(prey_contact),
+                left_area=t(wall[:, :n]),
+                mode=t(modes),
+                distance_to_prey=t(distance[:, :n]),
+                batch_size=(*b, n),
+                device=device,
+            ),
+            batch_size=(*b, n),
+            device=device,
+        )
+        prey = TensorDict(
+            observation=t(obs[:, n:]),
+            info=TensorDict(
+                captured=t(np.asarray(prey_contact.any(axis=1, keepdims=True))),
+                left_area=t(wall[:, n:]),
+                distance_to_prey=t(distance[:, n:]),
+                batch_size=(*b, 1),
+                device=device,
+            ),
+            batch_size=(*b, 1),
+            device=device,
+        )
+        return {"predator": predator, "prey": prey, "state": t(self._core.state())}
+
+    def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
+        joint = tensordict.get(("predator", "action")).cpu().numpy()
+        prey = tensordict.get(("prey", "action")).cpu().numpy()
+        if (
+            joint.min(initial=0) < 0
+            or joint.max(initial=0) >= N_JOINT
+            or not 0 <= prey.min() <= prey.max() < task.N_DIRECTIONS
+        ):
+            raise ValueError(f"actions: predators' joint actions in 0..{N_JOINT - 1}, the prey's in 0..11")
+        modes, directions = np.divmod(joint.astype(np.int64), task.N_DIRECTIONS)
+        r = self._core.step(modes, np.concatenate([directions, prey.astype(np.int64)], axis=1))
+        out = self._observations(r.observations, r.contacts.prey, r.contacts.wall, r.modes, r.distance_to_prey)
+        n = self._n_pred
+        rewards = torch.as_tensor(r.rewards.astype(np.float32), device=self.device)
+        terminated = torch.as_tensor(r.terminated, device=self.device).reshape(*self.batch_size, 1)
+        truncated = torch.as_tensor(r.truncated, device=self.device).reshape(*self.batch_size, 1)
+        done = terminated | truncated
+        for group, columns in (("predator", slice(0, n)), ("prey", slice(n, None))):
+            k = len(self.group_map[group])
+            out[group]["reward"] = rewards[:, columns].unsqueeze(-1)
+            out[group]["done"] = done.unsqueeze(1).expand(-1, k, -1).clone()
+            out[group]["terminated"] = terminated.unsqueeze(1).expand(-1, k, -1).clone()
+            out[group]["truncated"] = truncated.unsqueeze(1).expand(-1, k, -1).clone()
+        out["done"], out["terminated"], out["truncated"] = done, terminated.clone(), truncated.clone()
+        return TensorDict(out, batch_size=self.batch_size, device=self.device)
