@@ -257,8 +257,8 @@ def test_the_judged_stage_evaluates_each_run_as_it_ends_and_a_new_machine_trains
     """A tiny study of one condition, both stages (6 judged seeds a kind): every judged run's
     compact result holds its evaluations at every budget against the same-budget population and
     at the later ones against the first budget's, and the paper's comparison at the last; a new
-    machine given the populations and all results but one trains on only that run and writes
-    the same result."""
+    machine given the populations and all results but one trains only that run, its first part
+    included, and writes the same result."""
     import gzip
 
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -291,6 +291,7 @@ def test_the_judged_stage_evaluates_each_run_as_it_ends_and_a_new_machine_trains
     again = subprocess.run(command, env=env, capture_output=True, text=True, timeout=1200)
     assert again.returncode == 0, again.stderr
     assert [p.name for p in (b / "on").glob("*/runs/*")] == ["3p-low-shared-flat-seed3"]
+    assert [p.name for p in (b / "first").glob("*/runs/*")] == ["3p-low-shared-flat-seed3"]  # not both kinds' 12
     ours, theirs = (
         read(a / "results" / "3p-low-shared-flat-seed3.json.gz"),
         read(b / "results" / "3p-low-shared-flat-seed3.json.gz"),

@@ -247,7 +247,8 @@ def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> 
     outcome is kept (:func:`kept`) is not trained on again: the continuation is a plan of the
     rest (the smallest run of seeds holding them; its runs train one after another, each from its
     own step, so they are the runs the whole plan trains), and each run's outcome is kept as it
-    ends. The judged runs' first part is the rule study's plan of both kinds, trained once."""
+    ends. The judged runs' first part is the rule study's plan restricted to this kind's runs still
+    to do (in a work folder that holds the whole plan's first part, both kinds', that one)."""
     import dataclasses
 
     trial = args.trial
@@ -279,6 +280,13 @@ def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> 
         return True
     first_plan = design.first_part(stage, condition, kind, args.budgets, args.rule_keep, **trial)
     first = args.work / "first" / first_tag
+    if stage == "judged" and not first.exists():
+        # Only this kind's runs still to do: the same runs (a run's config is its own, whichever
+        # plan holds it; the replay check proves each to the bit), not both kinds' twenty again.
+        first_plan = dataclasses.replace(
+            first_plan, predators=(kind,), first_seed=on_plan.first_seed, seeds=on_plan.seeds
+        )
+        first = args.work / "first" / on.name
     from pursuit_bench.training.sweep import open_sweep
 
     if on.exists():
