@@ -4,9 +4,10 @@ single envs stacked by a ``SerialEnv`` (``benchmarl_task.make_env``), arena for 
 bit (``tests/test_marl_torchrl_env.py`` compares them step by step).
 
 Why: BenchMARL runs a task that is not vectorized as ``SerialEnv`` over its envs, and that path
-cost about 4 ms of CPU per env step here (TensorDict bookkeeping per env and per agent), more
-than the learning; a vectorized task is stepped as one env (BenchMARL's own rule: an env whose
-``batch_size`` is not empty is taken as it is). The predators act by one of 24 joint actions
+cost 4.5–6 ms of CPU per env step here (TensorDict bookkeeping per env and per agent), against
+0.2–0.3 ms batched (``benchmarks/bench_marl_env.py``), about a third of a whole IPPO run's CPU;
+a vectorized task is stepped as one env (BenchMARL's own rule: an env whose ``batch_size`` is
+not empty is taken as it is). The predators act by one of 24 joint actions
 (``env/joint_actions.py``), the prey by its 12 directions.
 
 Arena ``i`` plays what a single PettingZoo env seeded ``seeds[i]`` plays once wrapped: the wrapper
