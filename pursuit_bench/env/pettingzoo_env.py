@@ -251,9 +251,7 @@ class PursuitParallelEnv(ParallelEnv[str, np.ndarray, Any]):
         obs = self._core.reset(np.array([0]), [self.np_random], positions, obstacles)[0]
         self.agents = list(self.possible_agents)
         no = np.zeros((1, self.config.n_agents), dtype=bool)
-        z = task.as_complex(self._core.world.positions)
-        gaps = np.abs(z[:, :-1] - z[:, -1:])
-        distance = np.concatenate([gaps, gaps.min(axis=1, keepdims=True)], axis=1)
+        distance = task.distances_to_prey(self._core.world.positions)
         infos = self._infos(no[:, :-1], no, np.full((1, self._n_predators), -1), distance)
         return {a: obs[i] for i, a in enumerate(self.agents)}, infos
 

@@ -49,6 +49,15 @@ def as_complex(xy: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(xy, dtype=np.float64).view(np.complex128)[..., 0]
 
 
+def distances_to_prey(positions: np.ndarray) -> np.ndarray:
+    """(B, n_agents) each predator's distance to the prey and the prey's to its nearest predator,
+    from positions (B, n_agents, 2): what the envs report at a reset (a step's come from
+    :func:`finish_step`)."""
+    z = as_complex(positions)
+    gaps = np.abs(z[:, :-1] - z[:, -1:])
+    return np.concatenate([gaps, gaps.min(axis=1, keepdims=True)], axis=1)
+
+
 def as_xy(z: np.ndarray) -> np.ndarray:
     """View (...) complex128 as (..., 2) float64."""
     z = np.asarray(z, dtype=np.complex128)

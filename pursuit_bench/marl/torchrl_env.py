@@ -72,7 +72,6 @@ class PursuitTorchRLEnv(EnvBase):
         arenas = len(seeds)
         super().__init__(batch_size=torch.Size([arenas]), device=device)
         self.config = config
-        self.condition = condition
         names = list(config.agent_names)
         self.group_map = {"predator": names[:-1], "prey": names[-1:]}
         self._n_pred = config.n_predators
@@ -158,9 +157,7 @@ class PursuitTorchRLEnv(EnvBase):
         arenas = self._arenas[mask]
         obs = np.zeros((len(self._arenas), self.config.n_agents, self._obs_size), np.float32)
         obs[arenas] = self._core.reset(arenas, [self._rngs[i] for i in arenas.tolist()])
-        z = task.as_complex(self._core.world.positions)
-        gaps = np.abs(z[:, :-1] - z[:, -1:])
-        distance = np.concatenate([gaps, gaps.min(axis=1, keepdims=True)], axis=1)
+        distance = task.distances_to_prey(self._core.world.positions)
         no = np.zeros((len(self._arenas), self.config.n_agents), dtype=bool)
         modes = np.full((len(self._arenas), self._n_pred), -1)
         out = self._observations(obs, no[:, :-1], no, modes, distance)
