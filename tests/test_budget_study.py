@@ -332,3 +332,11 @@ def test_only_the_protocol_s_cut_shortens_the_judged_runs() -> None:
     for wrong in (5, 11):
         with pytest.raises(ValueError, match="expected 6 to 10"):
             design.continuation_plan("judged", "1p-high", "both", judged_seeds=wrong)
+
+
+@pytest.mark.parametrize("kinds", ["flat,flat", "prey", "hierarchical,"])
+def test_the_driver_refuses_kinds_not_of_the_study_in_one_line(tmp_path: Path, kinds: str) -> None:
+    command = [sys.executable, str(STUDY / "run.py"), "--work", str(tmp_path), "--kinds", kinds, "--skip-build-check"]
+    refused = subprocess.run(command, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True)
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1 and "--kinds" in refused.stderr
+    assert not (tmp_path / "progress.log").exists()

@@ -435,7 +435,7 @@ def drive(args: Any) -> int:
                 log(args.work, f"judged-{condition}: not every budget's population is written yet: left for later")
                 waiting.append(condition)
                 continue
-            for kind in design.KINDS:
+            for kind in args.kinds:
                 if stop[0] or not unit(args, stage, condition, kind, stop):
                     log(args.work, "stopped: rerun the same command to resume")
                     return 143
@@ -465,6 +465,12 @@ def main() -> int:
     )
     parser.add_argument("--conditions", default=",".join(design.CONDITIONS))
     parser.add_argument("--stages", default=",".join(STAGES), help="population, judged or both, in that order.")
+    parser.add_argument(
+        "--kinds",
+        default=",".join(design.KINDS),
+        help="The kinds to train, in the order given (a session too short for one kind's long run "
+        "does the cheaper kind first: every run's outcome is kept as it ends, whatever the order).",
+    )
     parser.add_argument("--budgets", default=None, help="(trying the driver only) e.g. 4,8,12")
     parser.add_argument("--preset", default=None, help="(trying the driver only) e.g. quick")
     parser.add_argument("--num-envs", type=int, default=None, help="(trying the driver only)")
@@ -491,6 +497,10 @@ def main() -> int:
         print(f"--conditions: unknown {unknown}; expected some of {', '.join(design.CONDITIONS)}", file=sys.stderr)
         return 2
     args.conditions = [c for c in design.CONDITIONS if c in args.conditions]
+    args.kinds = args.kinds.split(",")
+    if not set(args.kinds) <= set(design.KINDS) or len(set(args.kinds)) < len(args.kinds):
+        print(f"--kinds: {args.kinds} is not some of {', '.join(design.KINDS)}, each once", file=sys.stderr)
+        return 2
     args.stages = args.stages.split(",")
     if unknown := [s for s in args.stages if s not in STAGES]:
         print(f"--stages: unknown {unknown}; expected some of {', '.join(STAGES)}", file=sys.stderr)
