@@ -1,7 +1,8 @@
 """pursuit-bench as a BenchMARL task: its ten conditions through BenchMARL's own extension point
 (a ``TaskClass`` and a ``Task`` enum), the env one batched TorchRL env of BenchMARL's
-``num_envs`` arenas (``torchrl_env.py``: what TorchRL's ``PettingZooWrapper`` gives for as many
-single envs, bit for bit, at about a tenth of the CPU).
+``num_envs`` arenas (``torchrl_env.py``: what TorchRL's ``SerialEnv`` of as many
+``PettingZooWrapper`` envs gives, bit for bit through the collectors' loop; stepping it took 17–20×
+less CPU, ``benchmarks/bench_marl_env.py``).
 
 Two groups, ``predator`` (1–3 agents) and ``prey`` (1): BenchMARL trains every group of a task,
 so the prey learns beside the predators, as the paper's learned runs have it. A predator acts by
@@ -14,6 +15,12 @@ the centralised critics (MAPPO) and mixers (QMIX) read. Episodes end for all at 
 ``PursuitTask.PURSUIT_1P_HIGH.get_task()`` is condition 1p-high (any condition: upper case,
 ``-`` as ``_``, ``PURSUIT_`` in front); its config may hold the env's options
 (``max_steps``, ``wall_rule``, ``obstacles``, …; ``pursuit_bench.parallel_env``).
+
+BenchMARL gives its test env (``evaluation=true``, its default; off in ``pursuit-bench marl
+train``) the experiment's seed too, as it does for its VMAS tasks: its ``evaluation_episodes``
+arenas are seeded as the first training arenas and play their episodes at once, so the first
+evaluation starts where the first training episodes started (``evaluation_static`` reseeds them by
+``set_seed``, TorchRL's seed chain, to other starts).
 """
 
 from __future__ import annotations
@@ -40,7 +47,8 @@ def first_seeds(seed: int, num_envs: int) -> list[int]:
     """The arenas' seeds of a run of experiment seed ``seed``. The rows trained before the task was
     vectorized ran ``SerialEnv`` over :func:`make_env` envs made by one counting function, whose
     first env (seed ``SEED_STRIDE * seed``) only gave TorchRL the specs; the envs that trained
-    were the next ``num_envs``: these seeds, so that those rows train again exactly as they did."""
+    were the next ``num_envs``: these seeds, so that a run's arenas draw the starts they drew
+    then (BenchMARL's training itself is not repeatable run to run: PLAN.md)."""
     return [SEED_STRIDE * seed + 1 + i for i in range(num_envs)]
 
 
@@ -85,7 +93,7 @@ class PursuitTaskClass(TaskClass):
         self, num_envs: int, continuous_actions: bool, seed: int | None, device: Any
     ) -> Callable[[], EnvBase]:
         condition, options = condition_of(self.name), dict(self.config)
-        seeds = list(range(num_envs)) if seed is None else first_seeds(seed, num_envs)
+        seeds = first_seeds(0 if seed is None else seed, num_envs)  # None: experiment seed 0's arenas
 
         def batched() -> EnvBase:  # vectorized: BenchMARL steps it as one env (no SerialEnv of num_envs)
             return PursuitTorchRLEnv(condition, seeds, device, **options)

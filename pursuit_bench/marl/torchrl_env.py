@@ -12,8 +12,15 @@ not empty is taken as it is). The predators act by one of 24 joint actions
 
 Arena ``i`` plays what a single PettingZoo env seeded ``seeds[i]`` plays once wrapped: the wrapper
 resets its env with the seed when it is built (a start drawn and never played), and each later
-reset draws the next start from the same generator. Episodes end for all agents at once; an
-ended arena waits for TorchRL's partial reset (``_reset``), as the wrapped envs do.
+reset draws the next start from the same generator. ``set_seed(s)`` seeds the arenas as a
+``SerialEnv`` seeds its envs: by TorchRL's seed chain (``s``, then each next seed from the last),
+and returns the seed after the last arena's. Episodes end for all agents at once; an ended arena
+must be reset (a ``_reset`` mask, as TorchRL's collectors and ``rollout`` give) before it is
+stepped again, and a reset leaves the live arenas' entries as they were.
+
+Tested bit for bit against the ``SerialEnv`` it replaces through ``step_and_maybe_reset`` (the
+collectors' loop) with partial resets, and after ``set_seed``; not through every TorchRL
+transform or path.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ from typing import Any
 import numpy as np
 import torch
 from tensordict import TensorDict, TensorDictBase
+from torchrl._utils import seed_generator
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
@@ -32,7 +40,7 @@ from pursuit_bench.env.agent_spaces import POSITION_BOUND, VELOCITY_BOUND, obser
 from pursuit_bench.env.conditions import OBSTACLE_RADII, TaskConfig, resolve_condition
 from pursuit_bench.env.core import PursuitCore
 from pursuit_bench.env.joint_actions import N_JOINT
-from pursuit_bench.env.world import Backend
+from pursuit_bench.env.world import MAX_BLOCKS, Backend
 
 #: The info entries of each group, in the order the PettingZoo env's infos hold them.
 PREDATOR_INFO = ("captured", "left_area", "mode", "distance_to_prey")
@@ -70,6 +78,11 @@ class PursuitTorchRLEnv(EnvBase):
         if config.continuous:
             raise ValueError("the TorchRL env plays the discrete task: make it with continuous=False")
         arenas = len(seeds)
+        if (config.obstacles or config.wall_rule == "contain") and arenas > MAX_BLOCKS:
+            raise ValueError(
+                f"seeds: {arenas} arenas; at most {MAX_BLOCKS} where there are obstacles or walls that contain "
+                "(each arena is laid out as its single env lays it out, one of pymunk's 32 collision categories each)"
+            )
         super().__init__(batch_size=torch.Size([arenas]), device=device)
         self.config = config
         names = list(config.agent_names)
@@ -80,6 +93,8 @@ class PursuitTorchRLEnv(EnvBase):
         self._obs_size = task.obs_size(config.n_agents, config.obstacles > 0)
         self._rngs = [np.random.default_rng(int(seed)) for seed in seeds]
         self._core.reset(self._arenas, self._rngs)  # the wrapper's reset with the seed when it is built
+        self._ended = np.zeros(arenas, dtype=bool)
+        self._last: TensorDictBase | None = None  # the last step's or reset's output: a live arena's entries
         self._make_specs()
 
     def _make_specs(self) -> None:
@@ -145,30 +160,59 @@ class PursuitTorchRLEnv(EnvBase):
             device=self.device,
         )
 
+    def set_seed(self, seed: int | None = None, static_seed: bool = False) -> int | None:
+        """Seed the arenas as a ``SerialEnv`` of the wrapped envs seeds its envs: arena 0 ``seed``,
+        each next arena TorchRL's next seed in the chain (all ``seed`` with ``static_seed``), each
+        arena's next start drawn now (the wrapped env resets with its seed); returns the seed after
+        the last arena's. ``None`` leaves the arenas as they are."""
+        if seed is None:
+            return None
+        seeds = []
+        for _ in self._arenas:
+            seeds.append(seed)
+            seed = seed if static_seed else seed_generator(seed)
+        self._seed_arenas(seeds)
+        return seed
+
     def _set_seed(self, seed: int | None) -> None:
-        """Arena ``i`` from then on draws from a generator seeded ``seed + i``, its next start
-        drawn now (as the wrapped env's reset with a seed does)."""
         if seed is not None:
-            self._rngs = [np.random.default_rng(seed + i) for i in range(len(self._rngs))]
-            self._core.reset(self._arenas, self._rngs)
+            self.set_seed(seed)
+
+    def _seed_arenas(self, seeds: list[int]) -> None:
+        self._rngs = [np.random.default_rng(int(s)) for s in seeds]
+        self._core.reset(self._arenas, self._rngs)
+        self._ended[:] = False
+        self._last = None
 
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
+        if kwargs:
+            given = ", ".join(sorted(kwargs))
+            raise ValueError(f"reset: takes no options (got {given}); seed the arenas with set_seed")
         mask = self._reset_mask(tensordict)
+        if self._last is None and not mask.all():
+            raise ValueError("reset: the first reset resets every arena (no _reset mask)")
         arenas = self._arenas[mask]
-        obs = np.zeros((len(self._arenas), self.config.n_agents, self._obs_size), np.float32)
+        n = len(self._arenas)
+        obs = np.zeros((n, self.config.n_agents, self._obs_size), np.float32)
         obs[arenas] = self._core.reset(arenas, [self._rngs[i] for i in arenas.tolist()])
         distance = task.distances_to_prey(self._core.world.positions)
-        no = np.zeros((len(self._arenas), self.config.n_agents), dtype=bool)
-        modes = np.full((len(self._arenas), self._n_pred), -1)
-        out = self._observations(obs, no[:, :-1], no, modes, distance)
-        falses = torch.zeros((*self.batch_size, 1), dtype=torch.bool, device=self.device)
+        no = np.zeros((n, self.config.n_agents), dtype=bool)
+        modes = np.full((n, self._n_pred), -1)
+        out = TensorDict(self._observations(obs, no[:, :-1], no, modes, distance), batch_size=self.batch_size)
         for group, agents in self.group_map.items():
-            flags = torch.zeros((*self.batch_size, len(agents), 1), dtype=torch.bool, device=self.device)
             for key in ("done", "terminated", "truncated"):
-                out[group][key] = flags.clone()
+                out[group, key] = torch.zeros((*self.batch_size, len(agents), 1), dtype=torch.bool)
         for key in ("done", "terminated", "truncated"):
-            out[key] = falses.clone()
-        return TensorDict(out, batch_size=self.batch_size, device=self.device)
+            out[key] = torch.zeros((*self.batch_size, 1), dtype=torch.bool)
+        out = out.to(self.device)
+        if self._last is not None and not mask.all():  # the live arenas' entries as they were
+            live = torch.as_tensor(~mask, device=self.device)
+            for key in out.keys(True, True):
+                kept = self._last.get(key)
+                out.set(key, torch.where(live.reshape(-1, *([1] * (kept.dim() - 1))), kept, out.get(key)))
+        self._ended[mask] = False
+        self._last = out
+        return out
 
     def _reset_mask(self, tensordict: TensorDictBase | None) -> np.ndarray:
         """Which arenas to reset: those any ``_reset`` entry names (all when none is given)."""
@@ -222,14 +266,21 @@ class PursuitTorchRLEnv(EnvBase):
         return {"predator": predator, "prey": prey, "state": t(self._core.state())}
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
+        if self._ended.any():
+            raise ValueError(
+                f"step: arenas {self._arenas[self._ended].tolist()} ended their episodes; reset them first "
+                "(reset with a _reset mask, as step_and_maybe_reset and rollout do)"
+            )
         joint = tensordict.get(("predator", "action")).cpu().numpy()
         prey = tensordict.get(("prey", "action")).cpu().numpy()
-        if (
-            joint.min(initial=0) < 0
-            or joint.max(initial=0) >= N_JOINT
-            or not 0 <= prey.min() <= prey.max() < task.N_DIRECTIONS
-        ):
-            raise ValueError(f"actions: predators' joint actions in 0..{N_JOINT - 1}, the prey's in 0..11")
+        for name, given, n in (("predator", joint, N_JOINT), ("prey", prey, task.N_DIRECTIONS)):
+            if given.shape != (len(self._arenas), len(self.group_map[name])):
+                shape = (len(self._arenas), len(self.group_map[name]))
+                raise ValueError(f"actions: ({name!r}, 'action') of shape {tuple(given.shape)}; expected {shape}")
+            if given.size and not 0 <= given.min() <= given.max() < n:
+                raise ValueError(
+                    f"actions: ({name!r}, 'action') holds {given.min()}..{given.max()}; expected integers in 0..{n - 1}"
+                )
         modes, directions = np.divmod(joint.astype(np.int64), task.N_DIRECTIONS)
         r = self._core.step(modes, np.concatenate([directions, prey.astype(np.int64)], axis=1))
         out = self._observations(r.observations, r.contacts.prey, r.contacts.wall, r.modes, r.distance_to_prey)
@@ -245,4 +296,6 @@ class PursuitTorchRLEnv(EnvBase):
             out[group]["terminated"] = terminated.unsqueeze(1).expand(-1, k, -1).clone()
             out[group]["truncated"] = truncated.unsqueeze(1).expand(-1, k, -1).clone()
         out["done"], out["terminated"], out["truncated"] = done, terminated.clone(), truncated.clone()
-        return TensorDict(out, batch_size=self.batch_size, device=self.device)
+        self._ended = np.asarray(r.terminated | r.truncated, dtype=bool).reshape(-1).copy()
+        self._last = TensorDict(out, batch_size=self.batch_size, device=self.device)
+        return self._last

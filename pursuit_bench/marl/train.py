@@ -129,10 +129,12 @@ def experiment_config(run: MarlRun, folder: Path) -> ExperimentConfig:
 
 
 class OneThread(Callback):
-    """Keeps torch on one thread through the run. TorchRL's batched envs set the thread count back
-    to the one torch had when torchrl was imported when one closes (``BatchedEnvBase.close``):
-    measured, the count was 2 after the first collection, and on two busy cores two threads made
-    every op of the update 15× slower (tanh of 400 × 2 × 256 took 7.7 ms, 0.43 ms on one thread)."""
+    """Keeps torch on one thread through the run, whatever sets it back. When the task ran under
+    TorchRL's ``SerialEnv`` (before it was one batched env), closing a batched env set the count
+    back to the one torch had when torchrl was imported (``BatchedEnvBase.close``): measured, 2
+    after the first collection, and on two busy cores two threads made every op of the update 15×
+    slower (tanh of 400 × 2 × 256 took 7.7 ms, 0.43 ms on one thread). The task no longer builds
+    one; the callback stays as a guard, since a thread count set back costs that much."""
 
     def on_setup(self) -> None:
         torch.set_num_threads(1)
