@@ -263,8 +263,10 @@ def test_the_judged_stage_evaluates_each_run_as_it_ends_and_a_new_machine_trains
 
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     judged = ["--stages", "population,judged", "--judged-seeds", "6", "--eval-episodes", "3", "--no-replay-check"]
-    a = tmp_path / "a"
-    first = subprocess.run([*driver_command(a), *judged], env=env, capture_output=True, text=True, timeout=1200)
+    a = tmp_path / "a"  # two workers: chunks of two runs stacked, then one run alone on the new machine
+    first = subprocess.run(
+        [*driver_command(a), *judged, "--workers", "2"], env=env, capture_output=True, text=True, timeout=1200
+    )
     assert first.returncode == 0, first.stderr
     results = sorted((a / "results").glob("*.json.gz"))
     assert [p.name for p in results] == sorted(
@@ -340,3 +342,9 @@ def test_the_driver_refuses_kinds_not_of_the_study_in_one_line(tmp_path: Path, k
     refused = subprocess.run(command, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True)
     assert refused.returncode == 2 and refused.stderr.count("\n") == 1 and "--kinds" in refused.stderr
     assert not (tmp_path / "progress.log").exists()
+
+
+def test_judged_runs_go_in_chunks_of_consecutive_seeds_at_most_the_workers_long() -> None:
+    assert driver.consecutive([0, 1, 2, 3, 4], 2) == [[0, 1], [2, 3], [4]]
+    assert driver.consecutive([0, 2, 3, 7, 8, 9], 3) == [[0], [2, 3], [7, 8, 9]]
+    assert driver.consecutive([5], 1) == [[5]] and driver.consecutive([], 4) == []

@@ -242,33 +242,55 @@ def keep(args: Any, stage: str, condition: str, run: Path) -> None:
         evaluate_judged(args, condition, run)
 
 
+def consecutive(seeds: list[int], most: int) -> list[list[int]]:
+    """``seeds`` (increasing) cut into runs of consecutive seeds, each at most ``most`` long."""
+    chunks: list[list[int]] = []
+    for seed in seeds:
+        if chunks and seed == chunks[-1][-1] + 1 and len(chunks[-1]) < most:
+            chunks[-1].append(seed)
+        else:
+            chunks.append([seed])
+    return chunks
+
+
 def unit(args: Any, stage: str, condition: str, kind: str, stop: list[bool]) -> bool:
     """One kind's runs of a condition through both parts; whether they are done. A run whose
-    outcome is kept (:func:`kept`) is not trained on again: the continuation is a plan of the
-    rest (the smallest run of seeds holding them; its runs train one after another, each from its
-    own step, so they are the runs the whole plan trains), and each run's outcome is kept as it
-    ends. The judged runs' first part is the rule study's plan restricted to this kind's runs still
-    to do (in a work folder that holds the whole plan's first part, both kinds', that one)."""
+    outcome is kept (:func:`kept`) is not trained on again. The population's runs go through
+    together (the smallest run of seeds holding the rest). The judged runs go in chunks of at most
+    ``--workers`` consecutive seeds, each chunk through both parts before the next starts, so that
+    a session's first run is carried on minutes after the session starts, not after every first
+    part (a run finishes only within one session: PLAN.md); each run's config is its own whichever
+    plan holds it, and the replay check proves each first part to the bit."""
+    import dataclasses
+
+    on_plan = design.continuation_plan(stage, condition, kind, args.budgets, args.judged_seeds, **args.trial)
+    seeds = range(on_plan.first_seed, on_plan.first_seed + on_plan.seeds)
+    rest = [s for s in seeds if not kept(args, stage, condition, kind, s)]
+    tag = f"{stage}-{kind}-{condition}"
+    if not rest:
+        log(args.work, f"{tag}: every run's outcome is kept: not trained again")
+        return True
+    if len(rest) < on_plan.seeds:
+        log(args.work, f"{tag}: seeds {', '.join(map(str, rest))} to train; the others' outcomes are kept")
+    chunks = consecutive(rest, args.workers) if stage == "judged" else [list(range(rest[0], rest[-1] + 1))]
+    whole = chunks == [list(seeds)]
+    for chunk in chunks:
+        span = dataclasses.replace(on_plan, predators=(kind,), first_seed=chunk[0], seeds=len(chunk))
+        on = args.work / "on" / (tag if whole else f"{tag}-seeds{chunk[0]}-{chunk[-1]}")
+        if stop[0] or not part(args, stage, condition, kind, span, on, stop):
+            return False
+    return True
+
+
+def part(args: Any, stage: str, condition: str, kind: str, on_plan: Any, on: Path, stop: list[bool]) -> bool:
+    """``on_plan``'s runs (one kind's, some seeds) through both parts in ``on``; whether done. The
+    judged runs' first part on a new machine is the rule study's plan restricted to these runs (in
+    a work folder that holds the whole plan's first part, both kinds', that one)."""
     import dataclasses
 
     trial = args.trial
     tag = f"{stage}-{kind}-{condition}"
     first_tag = tag if stage == "population" else f"judged-{condition}"
-    on_plan = design.continuation_plan(stage, condition, kind, args.budgets, args.judged_seeds, **trial)
-    on_plan = dataclasses.replace(on_plan, predators=(kind,))
-    on = args.work / "on" / tag
-    rest = [
-        s
-        for s in range(on_plan.first_seed, on_plan.first_seed + on_plan.seeds)
-        if not kept(args, stage, condition, kind, s)
-    ]
-    if not rest:
-        log(args.work, f"{tag}: every run's outcome is kept: not trained again")
-        return True
-    if len(rest) < on_plan.seeds:
-        on_plan = dataclasses.replace(on_plan, first_seed=rest[0], seeds=rest[-1] - rest[0] + 1)
-        on = args.work / "on" / f"{tag}-from-seed{rest[0]}"
-        log(args.work, f"{tag}: seeds {rest[0]}–{rest[-1]} to train; the others' outcomes are kept")
 
     def finished(name: str) -> None:
         keep(args, stage, condition, on / "runs" / name)
