@@ -461,7 +461,7 @@ def _leaderboard() -> Any:
     return load_script("docs/gen/leaderboard.py")
 
 
-def test_the_marl_rows_comparisons_wait_for_the_whole_family_then_are_welch_and_holm(tmp_path: Path) -> None:
+def test_the_marl_rows_comparisons_wait_for_a_condition_s_rows_then_are_welch_and_holm(tmp_path: Path) -> None:
     leaderboard = _leaderboard()
     rng = np.random.default_rng(3)
     learners = [*leaderboard.THEIRS, *leaderboard.OURS]
@@ -489,9 +489,24 @@ def test_the_marl_rows_comparisons_wait_for_the_whole_family_then_are_welch_and_
     assert [rows[i]["p_holm"] for i in order] == pytest.approx(adjusted.tolist())
     table = leaderboard.marl_tables(tmp_path)
     assert table.count("\n| 1p-high | IPPO (BenchMARL) | flat DQN (ours) |") == 1
-    (tmp_path / "1p-high-iql-seed2.score.json").unlink()  # one row missing: no test of a part of the family
-    assert leaderboard.marl_comparisons(leaderboard.marl_scores(tmp_path)) == []
-    assert "1 of 45 rows still to come" in leaderboard.marl_tables(tmp_path)
+    # one row missing: its condition's six comparisons wait; the others' are made, Holm over all 18
+    # with the six counted at p = 1, so each adjusted p is at least the whole family's
+    (tmp_path / "1p-high-iql-seed2.score.json").unlink()
+    part = leaderboard.marl_comparisons(leaderboard.marl_scores(tmp_path))
+    assert len(part) == 12 and {r["condition"] for r in part} == {"2p-low-shared", "3p-high-individual"}
+    whole = {(r["theirs"], r["ours"], r["condition"]): r for r in rows}
+    for row in part:
+        same = whole[row["theirs"], row["ours"], row["condition"]]
+        assert row["p"] == same["p"] and row["p_holm"] >= same["p_holm"]
+    raw = [r["p"] for r in part] + [1.0] * 6
+    order = np.argsort(raw, kind="stable")
+    adjusted = np.minimum(1, np.maximum.accumulate([(18 - k) * raw[i] for k, i in enumerate(order)]))
+    by_hand = dict(zip(order.tolist(), adjusted.tolist(), strict=True))
+    assert [r["p_holm"] for r in part] == pytest.approx([by_hand[i] for i in range(12)])
+    table = leaderboard.marl_tables(tmp_path)
+    assert "1 of 45 rows still to come" in table and "of 1p-high are made once" in table
+    assert table.count("\n| 2p-low-shared | IPPO (BenchMARL) | flat DQN (ours) |") == 1
+    assert "| 1p-high | IPPO" not in table
 
 
 def test_the_leaderboard_page_regenerates_from_the_committed_scores_byte_for_byte() -> None:

@@ -110,17 +110,23 @@ def marl_scores(folder: Path = MARL) -> dict[tuple[str, str], dict[int, tuple[fl
 
 def marl_comparisons(scores: dict[tuple[str, str], dict[int, tuple[float, list[float]]]]) -> list[dict[str, Any]]:
     """The protocol's family (PLAN.md, "The comparison rows"): each of BenchMARL's learners minus
-    each of ours in each condition, Welch over the seeds, Holm over all of them; empty until every
-    seed of every learner is in (the family is fixed, so it is not tested in part)."""
+    each of ours in each condition, Welch over the seeds, Holm over all of them. A condition's
+    comparisons are made once every seed of every learner there is in; Holm is over the whole
+    family, each comparison not yet made counted at p = 1, so that every adjusted p is at least
+    what the whole family will give it (nothing rejected early is taken back when the rest land)."""
     pairs = [(t, o, c) for c in MARL_CONDITIONS for t in THEIRS for o in OURS]
-    if any(len(scores.get((k, c), {})) < len(MARL_SEEDS) for t, o, c in pairs for k in (t, o)):
-        return []
+    ready = {
+        c for c in MARL_CONDITIONS if all(len(scores.get((k, c), {})) == len(MARL_SEEDS) for k in [*THEIRS, *OURS])
+    }
     rows = []
     for theirs, ours, condition in pairs:
+        if condition not in ready:
+            continue
         a = [scores[theirs, condition][s][0] for s in MARL_SEEDS]
         b = [scores[ours, condition][s][0] for s in MARL_SEEDS]
         rows.append({"theirs": theirs, "ours": ours, "condition": condition, **stats.welch_difference(a, b)})
-    for row, adjusted in zip(rows, stats.holm([r["p"] for r in rows]), strict=True):
+    padded = [r["p"] for r in rows] + [1.0] * (len(pairs) - len(rows))
+    for row, adjusted in zip(rows, stats.holm(padded), strict=False):
         row["p_holm"] = float(adjusted)
     return rows
 
@@ -152,14 +158,22 @@ def marl_tables(folder: Path = MARL) -> str:
         out.append(f"| {name} | mean | " + " | ".join(means) + " |")
     out.append("")
     comparisons = marl_comparisons(scores)
-    if not comparisons:
+    family = len(THEIRS) * len(OURS) * len(MARL_CONDITIONS)
+    if missing:
+        waiting = [c for c in MARL_CONDITIONS if c not in {r["condition"] for r in comparisons}]
         out += [
             f"{missing} of {len(names) * len(MARL_CONDITIONS) * len(MARL_SEEDS)} rows still to come. The comparisons "
-            "(each BenchMARL learner minus each of ours, per condition: Welch over the three seeds, Holm over "
-            f"the {len(THEIRS) * len(OURS) * len(MARL_CONDITIONS)}) are made once every row is in.",
+            f"(each BenchMARL learner minus each of ours, per condition: Welch over the three seeds, Holm over the "
+            f"{family}) of {', '.join(waiting)} are made once their rows are all in"
+            + (
+                f"; those below are the {len(comparisons)} made so far, each p adjusted over all {family} with "
+                "the ones not yet made counted at 1 (so at least what the whole family will give it)."
+                if comparisons
+                else "."
+            ),
             "",
         ]
-    else:
+    if comparisons:
         out += [
             "| condition | learner | minus | difference [95 % CI] | Welch df | p (Holm) |",
             "|---|---|---|---:|---:|---:|",
