@@ -88,6 +88,7 @@ ANSWER_ROWS = (
     ),
 )
 RULE_STUDY = ROOT / "results" / "rule-study"
+BUDGET_STUDY = ROOT / "results" / "budget-study"
 REPRODUCTION = ROOT / "results" / "reproduction"
 BEGIN = "<!-- answer:begin: scripts/check_readme.py --write-answer writes this block -->"
 END = "<!-- answer:end -->"
@@ -155,7 +156,27 @@ def answer() -> dict[str, Any]:
             for b in summary["secondary"]["budgets"]
         ],
         "head_start_weights": _trapezoid_weights(summary["budgets"]),
+        "budget": budget_answer(),
     }
+
+
+def budget_answer() -> dict[str, Any]:
+    """The budget study's state (``results/budget-study``): its judged runs in and planned, and
+    once all are in (the whole family: ``budget_report.summarise``) the primary verdicts' counts
+    in the table's order (panels, rule helps, equivalent, not resolved, flat better)."""
+    from pursuit_bench.reports import budget_report
+
+    runs = budget_report.read_runs(BUDGET_STUDY)
+    planned = len(budget_report.CONDITIONS) * len(budget_report.KINDS) * len(budget_report.SEEDS)
+    done, _ = budget_report.complete(runs)
+    out: dict[str, Any] = {"runs": len(runs), "planned": planned, "panels": budget_report.PANELS, "row": None}
+    if len(done) == len(budget_report.CONDITIONS):
+        counts = budget_report.summarise(runs)["primary"]["counts"]
+        out["row"] = (
+            budget_report.PANELS,
+            *(counts[v] for v in ("rule helps", "equivalent", "not resolved", "flat better")),
+        )
+    return out
 
 
 def _trapezoid_weights(budgets: list[int]) -> list[float]:
@@ -176,7 +197,19 @@ def answer_table(counts: dict[str, Any]) -> str:
         f"| {label.format(**counts['budgets'])} | " + " | ".join(map(str, counts["rows"][key])) + " |"
         for label, key in ANSWER_ROWS
     ]
+    lines.insert(3, budget_row(counts))  # beside the primary row at 15,000 episodes
     return "\n".join(lines)
+
+
+def budget_row(counts: dict[str, Any]) -> str:
+    """The table's row of the budget study's primary verdicts (dashes while it runs)."""
+    budget = counts["budget"]
+    cells = budget["row"] or (budget["panels"], *["–"] * 4)
+    running = "" if budget["row"] else f"; running: {budget['runs']} of {budget['planned']} runs in, no verdict yet"
+    return (
+        "| hierarchical − flat: return against a population trained as long, at 10⁶ episodes (the budget study, "
+        f"**primary**; 3 conditions{running}) | " + " | ".join(map(str, cells)) + " |"
+    )
 
 
 def _panels(panels: list[tuple[str, str]]) -> str:
@@ -237,6 +270,25 @@ def answer_sentences(counts: dict[str, Any]) -> list[str]:
     return sentences
 
 
+def budget_sentence(counts: dict[str, Any]) -> str:
+    """The README's sentence on the budget study (its line in the answer): where it stands, or
+    once all its runs are in, its primary verdicts."""
+    budget = counts["budget"]
+    if budget["row"] is None:
+        return (
+            f"At the paper's budget, 10⁶ episodes, the budget study (fixed before its runs: 3 conditions, "
+            f"{budget['panels']} panels, 10 runs a kind) is running, {budget['runs']} of its {budget['planned']} "
+            'judged runs in; nothing of it is judged until all are (REPRODUCTION.md, "The paper\'s budget").'
+        )
+    _, helps, equivalent, unresolved, flat = budget["row"]
+    return (
+        f"**At the paper's budget, 10⁶ episodes** (the budget study, fixed before its runs: 3 conditions, "
+        f"{budget['panels']} panels, 10 runs a kind, against a population trained as long), the rule helps in "
+        f"{helps} of the {budget['panels']} panels, the flat learner is better in {flat}, {equivalent} are "
+        f"equivalent within ±0.05 and {unresolved} are not resolved."
+    )
+
+
 def _episodes(episodes: int) -> str:
     """``1500``, ``5000``, ``10,500``: a budget as the prose writes it (a comma from five digits)."""
     return f"{episodes:,}" if episodes >= 10_000 else str(episodes)
@@ -260,8 +312,10 @@ def _paragraph(counts: dict[str, Any]) -> str:
 
 
 def answer_block(counts: dict[str, Any]) -> str:
-    """The README's generated block: the sentences, then the table, between the markers."""
-    return "\n".join([BEGIN, _paragraph(counts), "", answer_table(counts), END])
+    """The README's generated block: the sentences, the budget study's, then the table, between
+    the markers."""
+    paragraph = _wrapped(" ".join([*answer_sentences(counts), budget_sentence(counts)]))
+    return "\n".join([BEGIN, paragraph, "", answer_table(counts), END])
 
 
 def study_block(counts: dict[str, Any]) -> str:

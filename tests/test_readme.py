@@ -53,6 +53,24 @@ def test_the_readme_s_answer_is_what_the_committed_results_give() -> None:
     assert by_hand[0] == counts["all_panels"] - counts["running_panels"]
 
 
+def test_the_readme_s_budget_study_line_and_row_follow_its_committed_runs() -> None:
+    """The budget study's line and row: while its runs come in, the count of committed judged
+    runs (counted here from the files) and no verdict; once all are in, the verdicts' counts."""
+    counts = check_readme.answer()
+    runs = sorted((check_readme.BUDGET_STUDY / "runs").glob("*-seed*.json.gz"))
+    assert counts["budget"]["runs"] == len(runs) and counts["budget"]["planned"] == 60
+    text = " ".join(check_readme.ROOT.joinpath("README.md").read_text().split())
+    if len(runs) < 60:
+        assert counts["budget"]["row"] is None
+        assert f"is running, {len(runs)} of its 60 judged runs in" in text
+        assert f"running: {len(runs)} of 60 runs in, no verdict yet) | 6 | – | – | – | – |" in text
+    done = {**counts, "budget": {**counts["budget"], "runs": 60, "row": (6, 1, 2, 3, 0)}}
+    sentence = check_readme.budget_sentence(done)
+    assert "the rule helps in 1 of the 6 panels, the flat learner is better in 0, 2 are equivalent" in sentence
+    assert "and 3 are not resolved" in sentence and "running" not in check_readme.budget_row(done)
+    assert check_readme.budget_row(done).endswith("| 6 | 1 | 2 | 3 | 0 |")
+
+
 def test_the_residual_study_s_24_primary_verdicts_recomputed_by_hand() -> None:
     """Every verdict of the residual study's primary table (docs/figures/residual-study/, what its
     block prints) is what a formula written here gives from results/residual-study/runs/: residual
