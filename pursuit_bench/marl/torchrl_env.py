@@ -93,7 +93,6 @@ class PursuitTorchRLEnv(EnvBase):
         self._obs_size = task.obs_size(config.n_agents, config.obstacles > 0)
         self._rngs = [np.random.default_rng(int(seed)) for seed in seeds]
         self._core.reset(self._arenas, self._rngs)  # the wrapper's reset with the seed when it is built
-        self._ended = np.zeros(arenas, dtype=bool)
         self._last: TensorDictBase | None = None  # the last step's or reset's output: a live arena's entries
         self._make_specs()
 
@@ -171,18 +170,14 @@ class PursuitTorchRLEnv(EnvBase):
         for _ in self._arenas:
             seeds.append(seed)
             seed = seed if static_seed else seed_generator(seed)
-        self._seed_arenas(seeds)
+        self._rngs = [np.random.default_rng(int(s)) for s in seeds]
+        self._core.reset(self._arenas, self._rngs)
+        self._last = None
         return seed
 
     def _set_seed(self, seed: int | None) -> None:
         if seed is not None:
             self.set_seed(seed)
-
-    def _seed_arenas(self, seeds: list[int]) -> None:
-        self._rngs = [np.random.default_rng(int(s)) for s in seeds]
-        self._core.reset(self._arenas, self._rngs)
-        self._ended[:] = False
-        self._last = None
 
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
         if kwargs:
@@ -210,7 +205,6 @@ class PursuitTorchRLEnv(EnvBase):
             for key in out.keys(True, True):
                 kept = self._last.get(key)
                 out.set(key, torch.where(live.reshape(-1, *([1] * (kept.dim() - 1))), kept, out.get(key)))
-        self._ended[mask] = False
         self._last = out
         return out
 
@@ -266,9 +260,12 @@ class PursuitTorchRLEnv(EnvBase):
         return {"predator": predator, "prey": prey, "state": t(self._core.state())}
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
-        if self._ended.any():
+        ended = (
+            np.zeros(len(self._arenas), bool) if self._last is None else self._last["done"].reshape(-1).cpu().numpy()
+        )
+        if ended.any():
             raise ValueError(
-                f"step: arenas {self._arenas[self._ended].tolist()} ended their episodes; reset them first "
+                f"step: arenas {self._arenas[ended].tolist()} ended their episodes; reset them first "
                 "(reset with a _reset mask, as step_and_maybe_reset and rollout do)"
             )
         joint = tensordict.get(("predator", "action")).cpu().numpy()
@@ -296,6 +293,5 @@ class PursuitTorchRLEnv(EnvBase):
             out[group]["terminated"] = terminated.unsqueeze(1).expand(-1, k, -1).clone()
             out[group]["truncated"] = truncated.unsqueeze(1).expand(-1, k, -1).clone()
         out["done"], out["terminated"], out["truncated"] = done, terminated.clone(), truncated.clone()
-        self._ended = np.asarray(r.terminated | r.truncated, dtype=bool).reshape(-1).copy()
         self._last = TensorDict(out, batch_size=self.batch_size, device=self.device)
         return self._last
