@@ -17,6 +17,8 @@ from scipy import stats as scipy_stats
 
 from pursuit_bench.reports import budget_report
 
+BUDGETS = budget_report.BUDGETS
+
 PREDATORS = {"3p-low-shared": 3, "2p-high-shared": 2, "1p-high": 1}
 #: hierarchical − flat in each condition's pool return: the rule helps, the flat is better, no difference
 EFFECT = {"3p-low-shared": 0.2, "2p-high-shared": -0.2, "1p-high": 0.0}
@@ -32,10 +34,12 @@ def trained_value(condition: str, kind: str, seed: int, budget: int, member: int
     return 0.5 + (EFFECT[condition] if kind == "hierarchical" else 0.0) + float(rng.normal(0, 0.004))
 
 
-def members(condition: str, kind: str, seed: int, budget: int) -> dict[str, Any]:
+def members(condition: str, kind: str, seed: int, budget: int, shift: float = 0.0) -> dict[str, Any]:
+    """One budget's evaluations; ``shift`` moves every return (the 15,000-episode population's
+    differ from the same-budget one's, so that a report reading the wrong one is caught)."""
     out = {}
     for m, name in enumerate(NAMES):
-        value = trained_value(condition, kind, seed, budget, m)
+        value = trained_value(condition, kind, seed, budget, m) + shift
         out[name] = {
             "panels": {f"predator_{p}": [value, 0.1, 0.2] for p in range(PREDATORS[condition])},
             "stderr": {f"predator_{p}": 0.01 for p in range(PREDATORS[condition])},
@@ -57,7 +61,7 @@ def write_runs(folder: Path, skip: tuple[str, str, int] | None = None) -> None:
                     "build": "b", "evaluated_by": "e", "protocol": "crn-1", "episodes": 60, "eval_seed": 12345,
                     "budgets": list(budget_report.BUDGETS),
                     "same_budget": {str(b): members(condition, kind, seed, b) for b in budget_report.BUDGETS},
-                    "first_population": {str(b): members(condition, kind, seed, b) for b in budget_report.BUDGETS[1:]},
+                    "first_population": {str(b): members(condition, kind, seed, b, -0.3) for b in BUDGETS[1:]},
                     "paper": {
                         "panels": {
                             f"predator_{p}": {"trained": 0.6 + 0.01 * seed, "always_chase": 0.5, "always_stalk": 0.55}
@@ -100,6 +104,15 @@ def test_the_verdicts_are_the_known_answers_once_all_six_panels_are_in(tmp_path:
         paper = summary["secondary"]["paper"][kind]
         assert set(paper["strict_count"].values()) == {budget_report.PANELS} and paper["of"] == budget_report.PANELS
         assert {r["verdict"] for r in paper["panels"]} == {"better"}
+    for condition in PREDATORS:  # the figure's curves: each budget's mean over runs and its t-interval
+        for kind in ("hierarchical", "flat"):
+            curve = summary["curves"][condition][kind]
+            assert curve["episodes"] == list(budget_report.BUDGETS)
+            for i, budget in enumerate(budget_report.BUDGETS):
+                values = pool_return(condition, kind, budget)
+                half = scipy_stats.t.ppf(0.975, len(values) - 1) * scipy_stats.sem(values)
+                assert curve["mean"][i] == pytest.approx(np.mean(values))
+                assert curve["ci"][i] == pytest.approx([np.mean(values) - half, np.mean(values) + half])
     walls = summary["secondary"]["wall_rates"]["1p-high"]["flat"]["population"]["15000"]
     assert walls["mean"] == pytest.approx(0.1)  # FleeingPrey (0) is not a learned member: the others' 0.1
     text = budget_report.markdown(summary)
@@ -122,6 +135,7 @@ def test_the_command_reads_the_study_s_folder_and_refuses_an_empty_one(tmp_path:
     code, output = run_cli("report", str(tmp_path / "study"), "--out", str(tmp_path / "out"))
     assert code == 0 and "verdicts written" in output, output
     assert (tmp_path / "out" / "budget-study.md").read_text().startswith("# The budget study")
+    assert (tmp_path / "out" / "budget-study.png").read_bytes().startswith(b"\x89PNG")
     (tmp_path / "empty" / "runs").mkdir(parents=True)
     (tmp_path / "empty" / budget_report.MARKER).write_text("{}\n")
     code, output = run_cli("report", str(tmp_path / "empty"))

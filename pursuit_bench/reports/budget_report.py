@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from pursuit_bench import stats
-from pursuit_bench.io.files import atomic_write_text
+from pursuit_bench.io.files import atomic_write_bytes, atomic_write_text
 from pursuit_bench.reports import pool, reproduction, rule_report, rule_study
 
 FORMAT = "budget-study-run-1"
@@ -107,6 +107,16 @@ def views(runs: list[dict[str, Any]], budget: int, population: str = "same") -> 
         }
         for r in runs
     ]
+
+
+def curves(runs: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per condition and kind, the pool return (mean over the condition's predators) against the
+    same-budget population at every budget, mean over runs with its t-interval: the figure's data."""
+    every = [
+        {**view, "pool": {str(b): evaluations(r, b, "same") for b in BUDGETS}}
+        for view, r in zip(views(runs, BUDGETS[0]), runs, strict=True)
+    ]
+    return rule_report.curves(every, [str(b) for b in BUDGETS])
 
 
 def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVALENCE_MARGIN) -> dict[str, Any]:
@@ -256,6 +266,7 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
             "paper": paper(runs, whole),
             "wall_rates": wall_rates(runs),
         },
+        "curves": curves(runs),
     }
 
 
@@ -389,9 +400,19 @@ def markdown(summary: dict[str, Any]) -> str:
 
 
 def write_report(where: Path, out: Path) -> dict[str, Any]:
-    """From the study's folder: ``budget-study-report.json`` (full precision) and ``budget-study.md``."""
+    """From the study's folder: ``budget-study-report.json`` (full precision), ``budget-study.md``
+    and ``budget-study.png`` (pool return against budget, log axis, per kind per condition)."""
+    from pursuit_bench.figures.plots import pool_png
+
     summary = summarise(read_runs(where))
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "budget-study-report.json", json.dumps(summary, indent=1) + "\n")
     atomic_write_text(out / "budget-study.md", markdown(summary))
+    figure = {
+        "curves": summary["curves"],
+        "runs_label": f"{len(SEEDS)} a kind",
+        "opponents": "the population trained as long",
+        "budgets": [{"episodes": b} for b in BUDGETS],
+    }
+    atomic_write_bytes(out / "budget-study.png", pool_png(figure, measure="pool return"))
     return summary
