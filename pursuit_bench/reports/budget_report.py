@@ -96,14 +96,14 @@ def evaluations(run: dict[str, Any], budget: int, population: str) -> dict[str, 
     return dict(run["same_budget"][str(budget)])
 
 
-def views(runs: list[dict[str, Any]], budget: int, population: str = "same") -> list[dict[str, Any]]:
-    """The runs as the rule study's reports read them: ``pool`` holding one budget's evaluations."""
+def views(runs: list[dict[str, Any]], budgets: tuple[int, ...], population: str = "same") -> list[dict[str, Any]]:
+    """The runs as the rule study's reports read them: ``pool`` holding the ``budgets``' evaluations."""
     return [
         {
             "kind": r["kind"],
             "seed": r["seed"],
             "condition": r["condition"],
-            "pool": {str(budget): evaluations(r, budget, population)},
+            "pool": {str(b): evaluations(r, b, population) for b in budgets},
         }
         for r in runs
     ]
@@ -112,11 +112,7 @@ def views(runs: list[dict[str, Any]], budget: int, population: str = "same") -> 
 def curves(runs: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """Per condition and kind, the pool return (mean over the condition's predators) against the
     same-budget population at every budget, mean over runs with its t-interval: the figure's data."""
-    every = [
-        {**view, "pool": {str(b): evaluations(r, b, "same") for b in BUDGETS}}
-        for view, r in zip(views(runs, BUDGETS[0]), runs, strict=True)
-    ]
-    return rule_report.curves(every, [str(b) for b in BUDGETS])
+    return rule_report.curves(views(runs, BUDGETS), [str(b) for b in BUDGETS])
 
 
 def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVALENCE_MARGIN) -> dict[str, Any]:
@@ -136,14 +132,14 @@ def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVA
 def family(runs: list[dict[str, Any]], budget: int, key: str, population: str, whole: bool) -> dict[str, Any]:
     """The panels' hierarchical − flat of the pool ``key`` (return or margin) at ``budget``."""
     measure: Callable[[dict[str, Any], str], float] = lambda r, p: rule_study.pooled(r["pool"][str(budget)], p)[key]  # noqa: E731
-    return {"episodes": budget, **judged(rule_report.rows_of(views(runs, budget, population), measure), whole)}
+    return {"episodes": budget, **judged(rule_report.rows_of(views(runs, (budget,), population), measure), whole)}
 
 
 def failures(runs: list[dict[str, Any]], budget: int, margin: float, whole: bool) -> list[dict[str, Any]]:
     """Failure shares at ``budget`` (a run fails in a panel when its pool margin there is below
     ``margin``): per panel and kind with Wilson's interval, Boschloo's test of the two shares;
     Holm over the panels only for the whole family."""
-    rows = rule_report.reliability(views(runs, budget), margin)
+    rows = rule_report.reliability(views(runs, (budget,)), margin)
     if not whole:
         for row in rows:
             row["difference"].pop("p_holm", None)
