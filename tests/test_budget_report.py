@@ -155,3 +155,70 @@ def test_a_result_made_with_other_settings_or_twice_is_refused_naming_the_file(t
         json.dump({**run, "seed": 4}, file)  # a second file of seed 4
     with pytest.raises(ValueError, match="named otherwise than its run"):
         budget_report.read_runs(tmp_path)
+
+
+def write_first_parts(folder: Path, conditions: tuple[str, ...], build: str = "b", budget: int = BUDGETS[0]) -> None:
+    """The first parts' results (``run.py --paper-first``): the learned predator's return 0.3 +
+    0.02 × seed, the fixed modes' 0.4 and 0.45."""
+    (folder / budget_report.FIRST_PARTS).mkdir(parents=True)
+    for condition in conditions:
+        for kind in ("hierarchical", "flat"):
+            for seed in range(10):
+                run = {
+                    "format": budget_report.FIRST_PART_FORMAT, "condition": condition, "kind": kind, "seed": seed,
+                    "build": build, "protocol": "crn-1", "budget": budget,
+                    "paper": {
+                        "episodes": 1000,
+                        "panels": {
+                            f"predator_{p}": {"trained": 0.3 + 0.02 * seed, "always_chase": 0.4, "always_stalk": 0.45}
+                            for p in range(PREDATORS[condition])
+                        },
+                    },
+                }  # fmt: skip
+                path = folder / budget_report.FIRST_PARTS / f"{condition}-{kind}-seed{seed}.json.gz"
+                with gzip.open(path, "wt") as file:
+                    json.dump(run, file)
+
+
+def test_fig2_holds_the_same_runs_at_both_budgets_and_says_which_are_not_yet_played(tmp_path: Path) -> None:
+    write_runs(tmp_path)
+    write_first_parts(tmp_path, ("3p-low-shared", "2p-high-shared"))
+    summary = budget_report.summarise(budget_report.read_runs(tmp_path), budget_report.read_first_parts(tmp_path))
+    rows = summary["fig2"]
+    assert len(rows) == 2 * budget_report.PANELS
+    first, final = str(BUDGETS[0]), str(BUDGETS[-1])
+    for row in rows:
+        at_end = row["budgets"][final]
+        trained = [0.6 + 0.01 * s for s in range(10)]  # write_runs' paper panels
+        half = scipy_stats.t.ppf(0.975, 9) * scipy_stats.sem(trained)
+        assert at_end["trained"]["mean"] == pytest.approx(np.mean(trained))
+        assert at_end["trained"]["ci"] == pytest.approx([np.mean(trained) - half, np.mean(trained) + half])
+        assert at_end["always_stalk"]["values"] == [0.55] * 10
+        if row["condition"] == "1p-high":
+            assert first not in row["budgets"]
+            continue
+        early = [0.3 + 0.02 * s for s in range(10)]
+        assert row["budgets"][first]["seeds"] == list(range(10))
+        assert row["budgets"][first]["trained"]["mean"] == pytest.approx(np.mean(early))
+        assert row["budgets"][first]["always_chase"]["ci"] == pytest.approx([0.4, 0.4])
+    text = budget_report.markdown(summary)
+    assert "40 of the judged runs' first parts in" in text
+    assert "| flat | 1p-high predator_0 | 15,000 | not yet played |" in text
+    (tmp_path / budget_report.MARKER).write_text("{}\n")
+    code, output = run_cli("report", str(tmp_path), "--out", str(tmp_path / "out"))
+    assert code == 0 and "budget-fig2.png" in output, output
+    assert (tmp_path / "out" / "budget-fig2.png").read_bytes().startswith(b"\x89PNG")
+    written = json.loads((tmp_path / "out" / "budget-study-report.json").read_text())
+    assert written["fig2"] == json.loads(json.dumps(rows))  # the command reads the first parts too
+
+
+def test_first_parts_of_another_budget_or_build_are_refused(tmp_path: Path) -> None:
+    write_runs(tmp_path)
+    write_first_parts(tmp_path, ("1p-high",), budget=50_000)
+    with pytest.raises(ValueError, match=r"1p-high-flat-seed0\.json\.gz: not a first part of 15,000 episodes"):
+        budget_report.read_first_parts(tmp_path)
+    other = tmp_path / "other"
+    write_runs(other)
+    write_first_parts(other, ("1p-high",), build="another")
+    with pytest.raises(ValueError, match="first parts trained by another, not the judged runs' build"):
+        budget_report.summarise(budget_report.read_runs(other), budget_report.read_first_parts(other))

@@ -301,6 +301,45 @@ def test_the_judged_stage_evaluates_each_run_as_it_ends_and_a_new_machine_trains
     assert ours == theirs
 
 
+@pytest.mark.slow
+@pytest.mark.long
+def test_paper_first_plays_each_judged_run_s_first_part_and_a_new_machine_plays_only_the_rest(tmp_path: Path) -> None:
+    """``--paper-first`` (PLAN.md, "Fig. 2 at 15,000 episodes"): every judged seed's first part of
+    one kind is trained and played by the paper's protocol at its end, nothing past it; a new
+    machine given all results but one trains only that run and writes the same result."""
+    import gzip
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    options = ["--paper-first", "--kinds", "flat", "--eval-episodes", "3", "--no-replay-check"]
+
+    def read(path: Path) -> dict[str, Any]:
+        return json.loads(gzip.decompress(path.read_bytes()))
+
+    a = tmp_path / "a"
+    first = subprocess.run([*driver_command(a), *options], env=env, capture_output=True, text=True, timeout=1200)
+    assert first.returncode == 0, first.stderr
+    names = sorted(f"3p-low-shared-flat-seed{s}.json.gz" for s in design.JUDGED_SEEDS)
+    assert sorted(p.name for p in (a / "results").glob("*.json.gz")) == names
+    for path in (a / "results").glob("*.json.gz"):
+        result = read(path)
+        assert result["format"] == "budget-study-paper-1" and result["budget"] == 3 and result["kind"] == "flat"
+        assert list(result["paper"]["panels"]) == ["predator_0", "predator_1", "predator_2"]
+        assert result["paper"]["episodes"] == 3
+    assert not (a / "on").exists()  # first parts only: nothing trained on
+    b = tmp_path / "b"
+    shutil.copytree(a / "results", b / "results")
+    (b / "results" / "3p-low-shared-flat-seed4.json.gz").unlink()
+    again = subprocess.run([*driver_command(b), *options], env=env, capture_output=True, text=True, timeout=1200)
+    assert again.returncode == 0, again.stderr
+    assert [p.name for p in (b / "first").glob("*/runs/*")] == ["3p-low-shared-flat-seed4"]
+    name = "3p-low-shared-flat-seed4.json.gz"
+    assert read(a / "results" / name) == read(b / "results" / name)
+    refused = subprocess.run(
+        [sys.executable, str(STUDY / "run.py"), "--paper-first"], env=env, capture_output=True, text=True, timeout=120
+    )
+    assert refused.returncode == 2 and "another --work" in refused.stderr, refused.stderr
+
+
 def test_the_replay_check_passes_the_rule_study_s_result_only_to_the_bit(tmp_path: Path, monkeypatch) -> None:
     import argparse
     import gzip

@@ -27,8 +27,8 @@ def report(where: Path, out: Path | None) -> None:
     On the rule study's folder (rule-study.json, runs/): rule-study-report.json, rule-study.md, rule-study.png.
     On the residual study's (residual-study.json, runs/): residual-study-report.json, .md and .png, its kinds
     compared pairwise as residual-study.json names them. On the budget study's (budget-study.json, runs/):
-    budget-study-report.json, budget-study.md and budget-study.png (interim, without verdicts, until
-    all 6 panels are in)."""
+    budget-study-report.json, budget-study.md, budget-study.png and budget-fig2.png (interim, without
+    verdicts, until all 6 panels are in)."""
     if not where.is_dir():  # before the statistics and the figures are imported: a refusal comes at once
         raise BadInput(f"{where}: no such folder" if not where.exists() else f"{where}: a file, not a folder")
     from pursuit_bench.reports import reproduction as reports
@@ -74,7 +74,7 @@ def _report_budget_study(where: Path, out: Path) -> None:
         raise BadInput(str(error)) from None
     state = "whole: verdicts written" if summary["whole_family"] else "interim: no verdicts until all 6 panels are in"
     click.echo(f"budget study, conditions in: {', '.join(summary['complete'])} ({state})")
-    click.echo(f"written in {out}: budget-study-report.json, budget-study.md, budget-study.png")
+    click.echo(f"written in {out}: budget-study-report.json, budget-study.md, budget-study.png, budget-fig2.png")
 
 
 def _report_pool(where: Path, out: Path) -> None:

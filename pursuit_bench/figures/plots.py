@@ -135,6 +135,61 @@ def fig2_png(table: list[dict[str, Any]]) -> bytes:
     return _png(fig)
 
 
+def fig2_budgets_png(rows: list[dict[str, Any]], budgets: list[str]) -> bytes:
+    """The paper's Fig. 2 of the same runs at ``budgets``: one row per kind, one panel per
+    predator; in each, a group of bars per budget (the learned predator, always-chase,
+    always-stalk, each with its own co-trained prey) at the mean over runs, its 95 % interval,
+    and each run's value as a dot; a budget not yet played is marked so."""
+    kinds = list(dict.fromkeys(r["kind"] for r in rows))
+    columns = max(sum(r["kind"] == k for r in rows) for k in kinds)
+    fig, axes = plt.subplots(
+        len(kinds), columns, figsize=(2.9 * columns, 2.6 * len(kinds) + 0.9), squeeze=False, sharey=True
+    )
+    variants = ("trained", "always_chase", "always_stalk")
+    for row, kind in enumerate(kinds):
+        entries = [r for r in rows if r["kind"] == kind]
+        for col in range(columns):
+            ax = axes[row][col]
+            if col >= len(entries):
+                ax.set_visible(False)
+                continue
+            for g, budget in enumerate(budgets):
+                entry = entries[col]["budgets"].get(budget)
+                left = g * (len(variants) + 1)
+                if entry is None:
+                    ax.text(left + 1, 0.5, "not yet\nplayed", ha="center", va="center", fontsize=7, color="grey",
+                            transform=ax.get_xaxis_transform())  # fmt: skip
+                    continue
+                for v, name in enumerate(variants):
+                    cell, x = entry[name], left + v
+                    color = VARIANT_COLORS.get(kind if name == "trained" else name, "grey")
+                    ax.bar(x, cell["mean"], color=color, width=0.8)
+                    if cell["ci"] is not None:
+                        lo, hi = cell["ci"]
+                        ax.errorbar(x, cell["mean"], yerr=[[cell["mean"] - lo], [hi - cell["mean"]]], color="black",
+                                    capsize=2, lw=0.8)  # fmt: skip
+                    ax.scatter([x] * len(cell["values"]), cell["values"], color="black", s=4, zorder=3)
+            centres = [g * (len(variants) + 1) + 1 for g in range(len(budgets))]
+            ax.set_xlim(-0.7, centres[-1] + 1.7)
+            ax.set_xticks(centres, [f"{int(b):,}\nepisodes" for b in budgets], fontsize=7)
+            ax.axhline(0.0, color="black", linewidth=0.6)
+            ax.set_title(f"{entries[col]['condition']} · {entries[col]['predator']}", fontsize=8)
+            ax.tick_params(axis="y", labelsize=7)
+        axes[row][0].set_ylabel(f"{kind} runs\nmean return", fontsize=8)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=VARIANT_COLORS[k]) for k in (*kinds, "always_chase", "always_stalk")]
+    labels = [f"learned ({k})" for k in kinds] + [LABELS["always_chase"], LABELS["always_stalk"]]
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
+    runs = sorted({len(e["seeds"]) for r in rows for e in r["budgets"].values()})
+    counts = "–".join(str(n) for n in (runs[0], runs[-1])) if len(set(runs)) > 1 else str(runs[0] if runs else 0)
+    fig.suptitle(
+        f"The paper's Fig. 2 of the same runs at {' and '.join(f'{int(b):,}' for b in budgets)} episodes: "
+        f"own co-trained prey, 1000 episodes a variant\nbars: mean over {counts} runs, 95 % t-interval; dots: runs",
+        fontsize=9,
+    )
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
+    return _png(fig)
+
+
 def curves_png(curves: dict[str, dict[str, Any]]) -> bytes:
     """Learning curves: per condition, every agent's return (top) and the capture rate
     (bottom) against episodes, mean over seeds with their interval; the predators' line style

@@ -45,6 +45,13 @@ FAILURE_MARGINS = (rule_study.FAILURE_MARGIN, 0.0)
 SETTINGS = {"protocol": "crn-1", "episodes": 60, "eval_seed": 12345, "budgets": list(BUDGETS)}
 PAPER_EPISODES = 1000
 MEMBERS = 9  # FleeingPrey and 8 learned prey a population
+#: The same judged runs' first parts played by the paper's protocol at 15,000 episodes
+#: (``studies/budget/run.py --paper-first``; added after the protocol, descriptive: PLAN.md,
+#: "Fig. 2 at 15,000 episodes"), so that Fig. 2 at 10^6 stands beside the same runs' at 15,000,
+#: measured by the same evaluation.
+FIRST_PARTS = "paper-15000"
+FIRST_PART_FORMAT = "budget-study-paper-1"
+VARIANTS = ("trained", "always_chase", "always_stalk")
 
 
 def read_runs(where: Path) -> list[dict[str, Any]]:
@@ -73,6 +80,63 @@ def read_runs(where: Path) -> list[dict[str, Any]]:
     if len(builds) > 1:
         raise ValueError(f"{where}: runs trained by {len(builds)} builds ({', '.join(sorted(builds))}): not mixed")
     return runs
+
+
+def read_first_parts(where: Path) -> list[dict[str, Any]]:
+    """The first parts' compact results under ``where/paper-15000`` (none where the folder is
+    absent), each checked: its format, run, budget and evaluation; ValueError naming the file."""
+    parts, seen = [], set()
+    for path in sorted((where / FIRST_PARTS).glob("*.json.gz")):
+        with gzip.open(path, "rt") as file:
+            run = json.load(file)
+        key = (run.get("condition"), run.get("kind"), run.get("seed"))
+        if run.get("format") != FIRST_PART_FORMAT:
+            raise ValueError(f"{path}: format {run.get('format')!r}, expected {FIRST_PART_FORMAT!r}")
+        if key[0] not in CONDITIONS or key[1] not in KINDS or key[2] not in SEEDS:
+            raise ValueError(f"{path}: {key} is not a judged run of the study (its conditions, kinds, seeds 0–9)")
+        if path.name != f"{key[0]}-{key[1]}-seed{key[2]}.json.gz" or key in seen:
+            raise ValueError(f"{path}: named otherwise than its run {key}, or a second file of it")
+        if run.get("budget") != BUDGETS[0] or run.get("protocol") != SETTINGS["protocol"]:
+            raise ValueError(f"{path}: not a first part of {BUDGETS[0]:,} episodes played by {SETTINGS['protocol']}")
+        if run["paper"].get("episodes") != PAPER_EPISODES:
+            raise ValueError(f"{path}: not the paper's protocol ({PAPER_EPISODES} episodes a variant)")
+        seen.add(key)
+        parts.append(run)
+    return parts
+
+
+def fig2(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The paper's Fig. 2 of the judged runs at 15,000 episodes (their first parts) and at 10^6:
+    per kind and panel, at each budget where runs are in, each variant's mean over the runs, its
+    t-interval and the runs' values (the fixed modes played with each run's own co-trained prey).
+    Descriptive: no test is made on it."""
+    rows = []
+    for kind in KINDS:
+        for condition in CONDITIONS:
+            mine = {
+                budget: sorted((r for r in source if (r["condition"], r["kind"]) == (condition, kind)), key=_seed)
+                for budget, source in ((BUDGETS[0], first_parts), (BUDGETS[-1], runs))
+            }
+            predators = sorted({p for held in mine.values() for r in held for p in r["paper"]["panels"]})
+            for predator in predators:
+                budgets: dict[str, dict[str, Any]] = {}
+                for budget, held in mine.items():
+                    if not held:
+                        continue
+                    budgets[str(budget)] = {"seeds": [r["seed"] for r in held]}
+                    for variant in VARIANTS:
+                        values = [float(r["paper"]["panels"][predator][variant]) for r in held]
+                        budgets[str(budget)][variant] = {
+                            "mean": float(np.mean(values)),
+                            "ci": stats.t_interval(values),
+                            "values": values,
+                        }
+                rows.append({"kind": kind, "condition": condition, "predator": predator, "budgets": budgets})
+    return rows
+
+
+def _seed(run: dict[str, Any]) -> int:
+    return int(run["seed"])
 
 
 def complete(runs: list[dict[str, Any]]) -> tuple[list[str], dict[str, dict[str, int]]]:
@@ -229,14 +293,18 @@ def wall_rates(runs: list[dict[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """Everything the report says, at full precision, over the conditions complete so far."""
+def summarise(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]] | None = None) -> dict[str, Any]:
+    """Everything the report says, at full precision, over the conditions complete so far;
+    ``first_parts`` (:func:`read_first_parts`) give Fig. 2 its 15,000-episode side."""
     if not runs:
         raise ValueError("no judged runs: expected runs/*.json.gz in the study's folder")
     done, waiting = complete(runs)
     if not done:
         raise ValueError(f"no condition has its 10 judged runs of both kinds yet (so far: {waiting})")
     runs = [r for r in runs if r["condition"] in done]
+    first_parts = [r for r in first_parts or [] if r["condition"] in done]
+    if other := {r["build"] for r in first_parts} - {r["build"] for r in runs}:
+        raise ValueError(f"first parts trained by {', '.join(sorted(other))}, not the judged runs' build")
     whole = len(done) == len(CONDITIONS)
     final = BUDGETS[-1]
     return {
@@ -263,6 +331,7 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, Any]:
             "wall_rates": wall_rates(runs),
         },
         "curves": curves(runs),
+        "fig2": fig2(runs, first_parts),
     }
 
 
@@ -382,6 +451,7 @@ def markdown(summary: dict[str, Any]) -> str:
             cells.append(row.get("verdict", "– (interim)"))
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
+    out += fig2_markdown(summary["fig2"])
     out += ["## Secondary: the prey's wall rate against budget (descriptive)", ""]
     out += [
         "| condition | predators | " + " | ".join(f"{b:,}" for b in BUDGETS) + " | own prey at 10^6 |",
@@ -395,12 +465,46 @@ def markdown(summary: dict[str, Any]) -> str:
     return "\n".join(out)
 
 
-def write_report(where: Path, out: Path) -> dict[str, Any]:
-    """From the study's folder: ``budget-study-report.json`` (full precision), ``budget-study.md``
-    and ``budget-study.png`` (pool return against budget, log axis, per kind per condition)."""
-    from pursuit_bench.figures.plots import pool_png
+def fig2_markdown(rows: list[dict[str, Any]]) -> list[str]:
+    """Fig. 2's table: per kind and panel, each variant's mean [95 % t-interval] over the runs at
+    15,000 episodes (the first parts) and at 10^6, with the runs each holds."""
+    first, final = (str(b) for b in (BUDGETS[0], BUDGETS[-1]))
+    held = sum(len(r["budgets"].get(first, {}).get("seeds", [])) for r in rows if r["predator"] == "predator_0")
+    out = [
+        f"## The paper's Fig. 2 of the same runs at {BUDGETS[0]:,} and {BUDGETS[-1]:,} episodes (descriptive; added "
+        "after the protocol)",
+        "",
+        "Each run against always-chase and always-stalk with its own co-trained prey, 1000 episodes a variant "
+        f"(seed {SETTINGS['eval_seed']}); at {BUDGETS[0]:,} episodes the runs' first parts, trained again by the "
+        "pinned build and replayed to the bit against the rule study's result, played by the same evaluation "
+        f"(`run.py --paper-first`; {held} of the judged runs' first parts in). Mean [95 % t-interval] over the runs.",
+        "",
+        "| kind | panel | episodes | runs | trained | always-chase | always-stalk |",
+        "|---|---|---:|---:|---:|---:|---:|",
+    ]
+    for row in rows:
+        for budget in (first, final):
+            if budget not in row["budgets"]:
+                cells = ["not yet played", "", "", ""]
+            else:
+                entry = row["budgets"][budget]
+                cells = [str(len(entry["seeds"]))]
+                for variant in VARIANTS:
+                    v = entry[variant]
+                    low, high = v["ci"] or [None, None]
+                    cells.append(f"{_num(v['mean'])} [{_num(low)}, {_num(high)}]")
+            head = [row["kind"], f"{row['condition']} {row['predator']}", f"{int(budget):,}"]
+            out.append("| " + " | ".join(head + cells) + " |")
+    return [*out, ""]
 
-    summary = summarise(read_runs(where))
+
+def write_report(where: Path, out: Path) -> dict[str, Any]:
+    """From the study's folder: ``budget-study-report.json`` (full precision), ``budget-study.md``,
+    ``budget-study.png`` (pool return against budget, log axis, per kind per condition) and
+    ``budget-fig2.png`` (the paper's Fig. 2 of the same runs at 15,000 and 10^6 episodes)."""
+    from pursuit_bench.figures.plots import fig2_budgets_png, pool_png
+
+    summary = summarise(read_runs(where), read_first_parts(where))
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "budget-study-report.json", json.dumps(summary, indent=1) + "\n")
     atomic_write_text(out / "budget-study.md", markdown(summary))
@@ -411,4 +515,5 @@ def write_report(where: Path, out: Path) -> dict[str, Any]:
         "budgets": [{"episodes": b} for b in BUDGETS],
     }
     atomic_write_bytes(out / "budget-study.png", pool_png(figure, measure="pool return"))
+    atomic_write_bytes(out / "budget-fig2.png", fig2_budgets_png(summary["fig2"], [str(BUDGETS[0]), str(BUDGETS[-1])]))
     return summary

@@ -21,6 +21,11 @@ numbers, predators greedy, a learned prey ε-greedy with ε 0.1):
   episodes a variant; secondary 5): each panel's three means and standard errors, the capture
   rate, the co-trained prey's outcomes (secondary 6).
 
+With ``--first-part`` the run is a first part alone (the driver's ``--paper-first``, added after
+the protocol, descriptive: PLAN.md, "Fig. 2 at 15,000 episodes"): after the same replay, only the
+paper's comparison at its end is written (format ``budget-study-paper-1``), so that the report
+draws Fig. 2 of the same runs at 15,000 episodes beside 10^6, by the same evaluation.
+
     python studies/budget/evaluate.py RUN --condition 3p-low-shared --build d9886b9… \\
         --populations pursuit_bench/pretrained/populations --out results/budget-study/runs
 """
@@ -38,6 +43,8 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 FORMAT = "budget-study-run-1"
+#: A first part's compact result (``--first-part``): the paper's comparison at 15,000 episodes.
+FIRST_PART_FORMAT = "budget-study-paper-1"
 BUDGETS = (15_000, 50_000, 150_000, 500_000, 1_000_000)
 EPISODES = 60
 PAPER_EPISODES = 1000
@@ -56,10 +63,10 @@ def checkpoint_of(budget: int, budgets: tuple[int, ...]) -> str:
     return runs.CHECKPOINT if budget == budgets[-1] else runs.milestone_checkpoint(budget)
 
 
-def replay(run: Path, condition: str, committed: Path, first: int = BUDGETS[0]) -> None:
+def replay(run: Path, condition: str, committed: Path, first: int = BUDGETS[0], checkpoint: str | None = None) -> None:
     """SystemExit unless this build, playing the run's checkpoint at ``first`` episodes (the rule
-    study's end of training) against the rule study's population, gives the rule study's
-    committed result there bit for bit."""
+    study's end of training; ``checkpoint``, by default the run's kept one of that budget) against
+    the rule study's population, gives the rule study's committed result there bit for bit."""
     from pursuit_bench.benchmark import populations
     from pursuit_bench.reports import rule_study
 
@@ -68,7 +75,7 @@ def replay(run: Path, condition: str, committed: Path, first: int = BUDGETS[0]) 
         raise SystemExit(f"{path}: no committed rule-study result to replay {run.name} against")
     expected = json.loads(gzip.decompress(path.read_bytes()))
     played = rule_study.evaluate_checkpoint(
-        run, checkpoint_of(first, BUDGETS), populations.FOLDER / populations.RULE_STUDY / condition
+        run, checkpoint or checkpoint_of(first, BUDGETS), populations.FOLDER / populations.RULE_STUDY / condition
     )
     if played != expected["pool"][str(first)]:
         raise SystemExit(f"{run.name}: this build's replay at {first} episodes differs from the rule study's result")
@@ -87,7 +94,7 @@ def evaluate(
     """The run's evaluations by the protocol (the module's docstring says what each holds)."""
     from pursuit_bench.reports import rule_study
     from pursuit_bench.training import runs
-    from pursuit_bench.training.evaluate import PROTOCOL, Actor, evaluate_agents
+    from pursuit_bench.training.evaluate import PROTOCOL
 
     def against(budget: int, population: int) -> dict[str, Any]:
         folder = populations / population_name(population) / condition
@@ -98,13 +105,6 @@ def evaluate(
 
     same = {str(b): against(b, b) for b in budgets}
     first = {str(b): against(b, budgets[0]) for b in budgets[1:]}
-    config, learned, _ = runs.described(run, runs.CHECKPOINT)
-    protocol = dict(config.protocol)
-    agents: dict[str, Actor] = dict(learned)
-    paper = evaluate_agents(
-        condition, agents, episodes=paper_episodes, seed=seed, prey_check=False, outcomes=True, **protocol
-    )
-    kept = ("trained", "always_chase", "always_stalk", "stderr")
     return {
         "protocol": PROTOCOL,
         "episodes": episodes,
@@ -112,23 +112,52 @@ def evaluate(
         "budgets": list(budgets),
         "same_budget": same,
         "first_population": first,
-        "paper": {
-            "episodes": paper_episodes,
-            "panels": {p["predator"]: {k: p[k] for k in kept} for p in paper["panels"]},
-            "capture_rate": paper["capture_rate"],
-            "prey": paper["prey_outcomes"],
-        },
+        "paper": paper_comparison(run, condition, runs.CHECKPOINT, paper_episodes, seed),
     }
 
 
-def write(out: Path, run: Path, condition: str, build: str, result: dict[str, Any]) -> Path:
-    """The compact result ``out/<run>.json.gz``, the run's identity first."""
+def paper_comparison(run: Path, condition: str, checkpoint: str, episodes: int, seed: int) -> dict[str, Any]:
+    """The run's predators at ``checkpoint`` with their own co-trained prey by the paper's
+    protocol: each panel's three means and standard errors, the capture rate, the prey's outcomes."""
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.evaluate import Actor, evaluate_agents
+
+    config, learned, _ = runs.described(run, checkpoint)
+    protocol = dict(config.protocol)
+    agents: dict[str, Actor] = dict(learned)
+    paper = evaluate_agents(
+        condition, agents, episodes=episodes, seed=seed, prey_check=False, outcomes=True, **protocol
+    )
+    kept = ("trained", "always_chase", "always_stalk", "stderr")
+    return {
+        "episodes": episodes,
+        "panels": {p["predator"]: {k: p[k] for k in kept} for p in paper["panels"]},
+        "capture_rate": paper["capture_rate"],
+        "prey": paper["prey_outcomes"],
+    }
+
+
+def evaluate_first_part(run: Path, condition: str, first: int, episodes: int, seed: int) -> dict[str, Any]:
+    """A first part's evaluation (PLAN.md, "Fig. 2 at 15,000 episodes", descriptive): the paper's
+    comparison at its end, which must be ``first`` episodes."""
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.evaluate import PROTOCOL
+
+    done = int(runs.load_checkpoint(run)["episodes_done"])
+    if done != first:
+        raise SystemExit(f"{run}: its checkpoint holds {done} episodes, not the first part's {first}")
+    paper = paper_comparison(run, condition, runs.CHECKPOINT, episodes, seed)
+    return {"protocol": PROTOCOL, "budget": first, "paper": paper}
+
+
+def write(out: Path, run: Path, condition: str, build: str, result: dict[str, Any], form: str = FORMAT) -> Path:
+    """The compact result ``out/<run>.json.gz`` of format ``form``, the run's identity first."""
     from pursuit_bench.io.files import atomic_write_bytes
 
     kind = next(k for k in ("hierarchical", "flat") if f"-{k}-seed" in run.name)
     evaluated_by = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout
     identity = {
-        "format": FORMAT,
+        "format": form,
         "name": run.name,
         "condition": condition,
         "kind": kind,
@@ -154,6 +183,12 @@ def main() -> int:
     parser.add_argument("--paper-episodes", type=int, default=PAPER_EPISODES, help="(trying the driver only)")
     parser.add_argument("--rule-results", type=Path, default=ROOT / "results" / "rule-study" / "runs")
     parser.add_argument("--no-replay-check", action="store_true", help="(trying the driver only)")
+    parser.add_argument(
+        "--first-part",
+        action="store_true",
+        help="The run is a first part (trained to the first budget only): replayed at its end, then only "
+        'the paper\'s comparison there is written (PLAN.md, "Fig. 2 at 15,000 episodes").',
+    )
     args = parser.parse_args()
     budgets = tuple(int(b) for b in args.budgets.split(","))
     if not args.no_replay_check:
@@ -163,7 +198,14 @@ def main() -> int:
         ).stdout.split("\n")  # fmt: skip
         if any(line.endswith(".py") for line in dirty):
             raise SystemExit(f"{ROOT}: uncommitted code changes: a study's evaluation is made by committed code only")
-        replay(args.run, args.condition, args.rule_results)
+        from pursuit_bench.training import runs
+
+        # a first part's end is its last checkpoint: it keeps none of its own length
+        replay(args.run, args.condition, args.rule_results, checkpoint=runs.CHECKPOINT if args.first_part else None)
+    if args.first_part:
+        result = evaluate_first_part(args.run, args.condition, budgets[0], args.paper_episodes, EVAL_SEED)
+        print(write(args.out, args.run, args.condition, args.build, result, FIRST_PART_FORMAT))
+        return 0
     result = evaluate(
         args.run,
         args.condition,

@@ -24,6 +24,15 @@ it in a process of its own with this checkout's package. Each run's outcome (a p
 member's prey at every budget, a judged run's compact result) is kept as the run ends where a
 later machine finds it (``--populations``, ``--results``: committed), and only runs without one
 are trained.
+
+``--paper-first`` (added after the protocol, descriptive: PLAN.md, "Fig. 2 at 15,000 episodes")
+trains only the judged runs' first parts, in a work folder of its own, and plays each by the
+paper's protocol at its end (``evaluate.py --first-part``, after the same replay check), so that
+the report draws the same runs' Fig. 2 at 15,000 beside 10^6 by the same evaluation:
+
+    cd /work/budget-eval && PYTHONPATH=/work/budget-build nohup nice -n 19 /work/main/.venv/bin/python \\
+        studies/budget/run.py --paper-first --work /work/budget-paper \\
+        --results /work/main/results/budget-study/paper-15000 > /dev/null 2>&1 &
 """
 
 from __future__ import annotations
@@ -338,10 +347,11 @@ def part(args: Any, stage: str, condition: str, kind: str, on_plan: Any, on: Pat
     return done
 
 
-def evaluate_judged(args: Any, condition: str, run: Path) -> None:
+def evaluate_judged(args: Any, condition: str, run: Path, first_part: bool = False) -> None:
     """A finished judged run evaluated by ``evaluate.py`` in a process of its own with this
     checkout's package (which first replays the rule study's result), its compact result written
-    to ``--results``; SystemExit if that fails."""
+    to ``--results``; SystemExit if that fails. ``first_part``: the run is a first part alone,
+    played by the paper's protocol at its end only (:func:`paper_first`)."""
     command = [
         sys.executable, str(HERE / "evaluate.py"), str(run), "--condition", condition, "--build", args.build["commit"],
         "--populations", str(args.populations), "--out", str(args.results),
@@ -351,13 +361,47 @@ def evaluate_judged(args: Any, condition: str, run: Path) -> None:
         command += ["--episodes", str(args.eval_episodes), "--paper-episodes", str(args.eval_episodes)]
     if args.no_replay_check:
         command.append("--no-replay-check")
-    log(args.work, f"{run.name}: evaluating (populations of every budget, the paper's protocol at the last)")
+    if first_part:
+        command.append("--first-part")
+        log(args.work, f"{run.name}: evaluating its first part (the paper's protocol at its end)")
+    else:
+        log(args.work, f"{run.name}: evaluating (populations of every budget, the paper's protocol at the last)")
     done = subprocess.run(command, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True)
     if done.returncode != 0:
         last = (done.stderr.strip().splitlines() or ["no message"])[-1]
         log(args.work, f"{run.name}: its evaluation failed ({last}): stopped")
         raise SystemExit(f"{run.name}: its evaluation failed: {last}")
     log(args.work, f"{run.name}: evaluated, {done.stdout.strip()}")
+
+
+def paper_first(args: Any, condition: str, kind: str, stop: list[bool]) -> bool:
+    """``--paper-first`` (PLAN.md, "Fig. 2 at 15,000 episodes": added after the protocol,
+    descriptive): a kind's judged runs' first part trained again by the rule study's plan and, as
+    each ends, evaluated by ``evaluate.py --first-part`` (replayed to the bit against the rule
+    study's committed result, then the paper's comparison at its end), its compact result kept in
+    ``--results``; a run with one is not trained again. Whether all are done."""
+    import dataclasses
+
+    tag = f"paper-{kind}-{condition}"
+    rest = [s for s in design.JUDGED_SEEDS if not kept(args, "judged", condition, kind, s)]
+    if not rest:
+        log(args.work, f"{tag}: every run's first part is evaluated: not trained again")
+        return True
+    rule_plan = design.first_part("judged", condition, kind, args.budgets, args.rule_keep, **args.trial)
+    for chunk in consecutive(rest, len(rest)):
+        plan = dataclasses.replace(rule_plan, predators=(kind,), first_seed=chunk[0], seeds=len(chunk))
+        first = args.work / "first" / f"{tag}-seeds{chunk[0]}-{chunk[-1]}"
+
+        def finished(name: str, first: Path = first) -> None:
+            if not (args.results / f"{name}.json.gz").is_file():
+                evaluate_judged(args, condition, first / "runs" / name, first_part=True)
+
+        log(args.work, f"{tag}: seeds {chunk[0]}-{chunk[-1]}, {args.budgets[0]} episodes by the rule study's plan")
+        if stop[0] or not sweep(args.work, first, plan, args.workers, stop, finished):
+            return False
+        for name in sorted(plan.runs()):
+            finished(name)  # trained earlier, or heard of before a stop
+    return True
 
 
 def populations_written(args: Any, condition: str) -> bool:
@@ -445,11 +489,20 @@ def drive(args: Any) -> int:
         check_build(args.work, args.build, json.loads((HERE / "build.json").read_text()))
     (args.work / "driver.pid").write_text(f"{os.getpid()}\n")
     stop = driver.stop_flag(args.work)
+    what = "first parts by the paper's protocol" if args.paper_first else f"stages {', '.join(args.stages)}"
     log(
         args.work,
-        f"budget study: {', '.join(args.conditions)}; stages {', '.join(args.stages)}; budgets {list(args.budgets)}; "
+        f"budget study: {', '.join(args.conditions)}; {what}; budgets {list(args.budgets)}; "
         f"commit {args.build['commit'][:10]}, code {args.build['code']}, pid {os.getpid()}",
     )
+    if args.paper_first:
+        for condition in args.conditions:
+            for kind in args.kinds:
+                if stop[0] or not paper_first(args, condition, kind, stop):
+                    log(args.work, "stopped: rerun the same command to resume")
+                    return 143
+        log(args.work, "finished: every judged run's first part played by the paper's protocol")
+        return 0
     waiting = []
     for stage in args.stages:
         for condition in args.conditions:
@@ -513,6 +566,12 @@ def main() -> int:
     parser.add_argument("--eval-episodes", type=int, default=None, help="(trying the driver only)")
     parser.add_argument("--no-population-check", action="store_true", help="(trying the driver only)")
     parser.add_argument("--skip-build-check", action="store_true", help="(tests only)")
+    parser.add_argument(
+        "--paper-first",
+        action="store_true",
+        help="Only the judged runs' first parts, each played by the paper's protocol at its end into --results "
+        '(PLAN.md, "Fig. 2 at 15,000 episodes"); give another --work than the study\'s.',
+    )
     args = parser.parse_args()
     args.conditions = args.conditions.split(",")
     if unknown := [c for c in args.conditions if c not in design.CONDITIONS]:
@@ -560,6 +619,9 @@ def main() -> int:
             return 2
         args.rule_keep = ()
     trying = args.trial or args.budgets != design.BUDGETS or args.no_population_check or args.no_replay_check
+    if args.paper_first and args.work == WORK:
+        print("--paper-first: give another --work than the study's (its driver's folder)", file=sys.stderr)
+        return 2
     if trying and args.work == WORK:
         print("trying the driver (--budgets, --preset …): give another --work than the study's", file=sys.stderr)
         return 2
