@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -717,7 +718,7 @@ def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     ``titles`` (a panel's title by condition, else the condition)."""
     curves = summary["curves"]
     conditions = list(curves)
-    columns = 5
+    columns = min(5, max(len(conditions), 1))  # no empty columns beside a study of few conditions
     rows = -(-len(conditions) // columns)
     fig, axes = plt.subplots(rows, columns, figsize=(3.0 * columns, 2.6 * rows + 1.0), squeeze=False)
     colors = {"hierarchical": VARIANT_COLORS["hierarchical"], "flat": VARIANT_COLORS["flat"], "residual": "#dd8452"}
@@ -743,14 +744,15 @@ def pool_png(summary: dict[str, Any], measure: str = "pool margin") -> bytes:
     axes.flat[0].legend(fontsize=7, loc="best")
     seeds = summary.get("runs_label") or ", ".join(f"{len(v)} {k}" for k, v in summary["seeds"].items())
     budgets = [b["episodes"] for b in summary["budgets"]]
-    fig.suptitle(
+    lines = [
         ("Margin over the better fixed mode" if measure == "pool margin" else measure.capitalize())
         + f" against {summary.get('opponents', 'one pool of opponents')}, by training episodes: mean over the "
-        "condition's predators\n"
+        "condition's predators",
         f"mean over runs ({seeds}), band: 95 % t-interval; "
         f"tick marks at every kept budget ({', '.join(f'{e / 1000:g}k' for e in budgets)}), labelled where they fit",
-        fontsize=10,
-    )
+    ]
+    width = int(12 * 3.0 * columns)  # characters a line of the title holds at its size
+    fig.suptitle("\n".join(textwrap.fill(line, width) for line in lines), fontsize=10)
     fig.tight_layout()
     return _png(fig)
 

@@ -176,7 +176,8 @@ def views(runs: list[dict[str, Any]], budgets: tuple[int, ...], population: str 
 def curves(runs: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """Per condition and kind, the pool return (mean over the condition's predators) against the
     same-budget population at every budget, mean over runs with its t-interval: the figure's data."""
-    return rule_report.curves(views(runs, BUDGETS), [str(b) for b in BUDGETS])
+    drawn = rule_report.curves(views(runs, BUDGETS), [str(b) for b in BUDGETS])
+    return {c: drawn[c] for c in CONDITIONS if c in drawn}  # the protocol's order, not the alphabet's
 
 
 def judged(rows: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVALENCE_MARGIN) -> dict[str, Any]:
