@@ -157,20 +157,29 @@ def test_a_result_made_with_other_settings_or_twice_is_refused_naming_the_file(t
         budget_report.read_runs(tmp_path)
 
 
-def write_first_parts(folder: Path, conditions: tuple[str, ...], build: str = "b", budget: int = BUDGETS[0]) -> None:
-    """The first parts' results (``run.py --paper-first``): the learned predator's return 0.3 +
-    0.02 × seed, the fixed modes' 0.4 and 0.45."""
-    (folder / budget_report.FIRST_PARTS).mkdir(parents=True)
+def early_value(seed: int, predator: int) -> float:
+    return 0.3 + 0.02 * seed + 0.001 * predator
+
+
+def write_first_parts(
+    folder: Path, conditions: tuple[str, ...], build: str = "b", budget: int = BUDGETS[0], seeds: range = range(10)
+) -> None:
+    """The first parts' results (``run.py --paper-first``): the learned predator's return
+    :func:`early_value`, the fixed modes' 0.4 and 0.45."""
+    (folder / budget_report.FIRST_PARTS).mkdir(parents=True, exist_ok=True)
     for condition in conditions:
         for kind in ("hierarchical", "flat"):
-            for seed in range(10):
+            for seed in seeds:
                 run = {
                     "format": budget_report.FIRST_PART_FORMAT, "condition": condition, "kind": kind, "seed": seed,
-                    "build": build, "protocol": "crn-1", "budget": budget,
+                    "build": build, "protocol": "crn-1", "eval_seed": 12345, "budget": budget,
+                    "same_as_judged": condition != "3p-low-shared",
                     "paper": {
                         "episodes": 1000,
                         "panels": {
-                            f"predator_{p}": {"trained": 0.3 + 0.02 * seed, "always_chase": 0.4, "always_stalk": 0.45}
+                            f"predator_{p}": {
+                                "trained": early_value(seed, p), "always_chase": 0.4, "always_stalk": 0.45
+                            }
                             for p in range(PREDATORS[condition])
                         },
                     },
@@ -197,12 +206,12 @@ def test_fig2_holds_the_same_runs_at_both_budgets_and_says_which_are_not_yet_pla
         if row["condition"] == "1p-high":
             assert first not in row["budgets"]
             continue
-        early = [0.3 + 0.02 * s for s in range(10)]
+        early = [early_value(s, int(row["predator"][-1])) for s in range(10)]
         assert row["budgets"][first]["seeds"] == list(range(10))
         assert row["budgets"][first]["trained"]["mean"] == pytest.approx(np.mean(early))
         assert row["budgets"][first]["always_chase"]["ci"] == pytest.approx([0.4, 0.4])
     text = budget_report.markdown(summary)
-    assert "40 of the judged runs' first parts in" in text
+    assert "40 of the 60 first parts in, 40 drawn" in text and "20 of them also checked" in text
     assert "| flat | 1p-high predator_0 | 15,000 | not yet played |" in text
     (tmp_path / budget_report.MARKER).write_text("{}\n")
     code, output = run_cli("report", str(tmp_path), "--out", str(tmp_path / "out"))
@@ -222,3 +231,19 @@ def test_first_parts_of_another_budget_or_build_are_refused(tmp_path: Path) -> N
     write_first_parts(other, ("1p-high",), build="another")
     with pytest.raises(ValueError, match="first parts trained by another, not the judged runs' build"):
         budget_report.summarise(budget_report.read_runs(other), budget_report.read_first_parts(other))
+
+
+def test_fig2_pairs_the_budgets_by_seed_and_draws_no_condition_still_running(tmp_path: Path) -> None:
+    write_runs(tmp_path, skip=("1p-high", "flat", 9))  # 1p-high not complete: not drawn
+    write_first_parts(tmp_path, ("2p-high-shared",), seeds=range(3, 8))
+    write_first_parts(tmp_path, ("1p-high",))
+    summary = budget_report.summarise(budget_report.read_runs(tmp_path), budget_report.read_first_parts(tmp_path))
+    assert summary["first_parts"] == {"in": 30, "of": 60, "drawn": 10, "same_as_judged": 10}
+    assert {r["condition"] for r in summary["fig2"]} == {"3p-low-shared", "2p-high-shared"}
+    first, final = str(BUDGETS[0]), str(BUDGETS[-1])
+    for row in summary["fig2"]:
+        if row["condition"] == "3p-low-shared":  # no first part: 10^6 over all ten runs
+            assert list(row["budgets"]) == [final] and row["budgets"][final]["seeds"] == list(range(10))
+            continue
+        assert row["budgets"][first]["seeds"] == row["budgets"][final]["seeds"] == [3, 4, 5, 6, 7]
+        assert row["budgets"][final]["trained"]["values"] == pytest.approx([0.6 + 0.01 * s for s in range(3, 8)])

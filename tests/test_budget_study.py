@@ -35,6 +35,18 @@ def _driver() -> Any:
 driver = _driver()
 design = driver.design
 
+
+def _evaluation() -> Any:
+    """studies/budget/evaluate.py as a module of its own name."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("budget_evaluate", STUDY / "evaluate.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 from pursuit_bench.reports import rule_study  # noqa: E402
 from pursuit_bench.training import runs  # noqa: E402
 from pursuit_bench.training.stack import FolderRun, train_stack  # noqa: E402
@@ -323,6 +335,7 @@ def test_paper_first_plays_each_judged_run_s_first_part_and_a_new_machine_plays_
     for path in (a / "results").glob("*.json.gz"):
         result = read(path)
         assert result["format"] == "budget-study-paper-1" and result["budget"] == 3 and result["kind"] == "flat"
+        assert result["eval_seed"] == 12345 and result["same_as_judged"] is False  # --no-replay-check: unchecked
         assert list(result["paper"]["panels"]) == ["predator_0", "predator_1", "predator_2"]
         assert result["paper"]["episodes"] == 3
     assert not (a / "on").exists()  # first parts only: nothing trained on
@@ -364,6 +377,39 @@ def test_the_replay_check_passes_the_rule_study_s_result_only_to_the_bit(tmp_pat
         driver.replay_check(args, "1p-high", tmp_path / "1p-high-flat-seed3")
     with pytest.raises(SystemExit, match="no committed rule-study result"):
         driver.replay_check(args, "1p-high", tmp_path / "1p-high-flat-seed4")
+
+
+def test_a_first_part_must_end_at_the_first_budget_and_equal_the_judged_run_there(tmp_path: Path, monkeypatch) -> None:
+    """``evaluate.py --first-part``'s checks: the run's checkpoint at the first budget, and its
+    play against that budget's population equal, to the bit, to the judged run's committed
+    ``same_budget`` there (none committed: nothing to check, said so)."""
+    import gzip
+
+    evaluation = _evaluation()
+    played = {"FleeingPrey": {"panels": {"predator_0": [0.5, 0.25, 0.125]}, "capture_rate": 0.5}}
+    seen: list[tuple[str, int, int]] = []
+
+    def evaluate_checkpoint(run, checkpoint, folder, episodes, seed, outcomes):  # type: ignore[no-untyped-def]
+        seen.append((checkpoint, episodes, seed))
+        assert folder == tmp_path / "budget-study-ep15000" / "1p-high" and outcomes
+        return json.loads(json.dumps(played))
+
+    monkeypatch.setattr(rule_study, "evaluate_checkpoint", evaluate_checkpoint)
+    judged = tmp_path / "judged"
+    judged.mkdir()
+    committed = {"same_budget": {"15000": json.loads(json.dumps(played)), "50000": {}}}
+    (judged / "1p-high-flat-seed3.json.gz").write_bytes(gzip.compress(json.dumps(committed).encode()))
+    run = tmp_path / "1p-high-flat-seed3"
+    assert evaluation.same_as_judged(run, "1p-high", tmp_path, judged, 15_000, 60)
+    assert seen == [(runs.CHECKPOINT, 60, 12345)]  # the first part's last checkpoint, by the protocol
+    assert not evaluation.same_as_judged(tmp_path / "1p-high-flat-seed4", "1p-high", tmp_path, judged, 15_000, 60)
+    played["FleeingPrey"]["panels"]["predator_0"][1] += 2**-40
+    with pytest.raises(SystemExit, match="differs from the budget study's judged run at 15000 episodes"):
+        evaluation.same_as_judged(run, "1p-high", tmp_path, judged, 15_000, 60)
+    monkeypatch.setattr(runs, "load_checkpoint", lambda folder: {"episodes_done": 15_000})
+    evaluation.first_part_episodes(run, 15_000)
+    with pytest.raises(SystemExit, match="holds 15000 episodes, not the first part's 50000"):
+        evaluation.first_part_episodes(run, 50_000)
 
 
 def test_only_the_protocol_s_cut_shortens_the_judged_runs() -> None:

@@ -136,11 +136,11 @@ def fig2_png(table: list[dict[str, Any]]) -> bytes:
     return _png(fig)
 
 
-def fig2_budgets_png(rows: list[dict[str, Any]], budgets: list[str]) -> bytes:
+def fig2_budgets_png(rows: list[dict[str, Any]], budgets: list[str], episodes: int) -> bytes:
     """The paper's Fig. 2 of the same runs at ``budgets``: one row per kind, one panel per
     predator; in each, a group of bars per budget (the learned predator, always-chase,
-    always-stalk, each with its own co-trained prey) at the mean over runs, its 95 % interval,
-    and each run's value as a dot; a budget not yet played is marked so."""
+    always-stalk, each with its own co-trained prey, ``episodes`` a variant) at the mean over
+    runs, its 95 % interval, and each run's value as a dot; a budget not yet played is marked so."""
     kinds = list(dict.fromkeys(r["kind"] for r in rows))
     columns = max(sum(r["kind"] == k for r in rows) for k in kinds)
     fig, axes = plt.subplots(
@@ -184,7 +184,8 @@ def fig2_budgets_png(rows: list[dict[str, Any]], budgets: list[str]) -> bytes:
     counts = "–".join(str(n) for n in (runs[0], runs[-1])) if len(set(runs)) > 1 else str(runs[0] if runs else 0)
     fig.suptitle(
         f"The paper's Fig. 2 of the same runs at {' and '.join(f'{int(b):,}' for b in budgets)} episodes: "
-        f"own co-trained prey, 1000 episodes a variant\nbars: mean over {counts} runs, 95 % t-interval; dots: runs",
+        f"own co-trained prey, {episodes} episodes a variant\n"
+        f"bars: mean over {counts} runs, 95 % t-interval; dots: runs",
         fontsize=9,
     )
     fig.tight_layout(rect=(0, 0.05, 1, 1))

@@ -96,8 +96,15 @@ def read_first_parts(where: Path) -> list[dict[str, Any]]:
             raise ValueError(f"{path}: {key} is not a judged run of the study (its conditions, kinds, seeds 0–9)")
         if path.name != f"{key[0]}-{key[1]}-seed{key[2]}.json.gz" or key in seen:
             raise ValueError(f"{path}: named otherwise than its run {key}, or a second file of it")
-        if run.get("budget") != BUDGETS[0] or run.get("protocol") != SETTINGS["protocol"]:
-            raise ValueError(f"{path}: not a first part of {BUDGETS[0]:,} episodes played by {SETTINGS['protocol']}")
+        if (run.get("budget"), run.get("protocol"), run.get("eval_seed")) != (
+            BUDGETS[0],
+            SETTINGS["protocol"],
+            SETTINGS["eval_seed"],
+        ):
+            raise ValueError(
+                f"{path}: not a first part of {BUDGETS[0]:,} episodes played by {SETTINGS['protocol']}, "
+                f"seed {SETTINGS['eval_seed']}"
+            )
         if run["paper"].get("episodes") != PAPER_EPISODES:
             raise ValueError(f"{path}: not the paper's protocol ({PAPER_EPISODES} episodes a variant)")
         seen.add(key)
@@ -107,16 +114,19 @@ def read_first_parts(where: Path) -> list[dict[str, Any]]:
 
 def fig2(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The paper's Fig. 2 of the judged runs at 15,000 episodes (their first parts) and at 10^6:
-    per kind and panel, at each budget where runs are in, each variant's mean over the runs, its
-    t-interval and the runs' values (the fixed modes played with each run's own co-trained prey).
-    Descriptive: no test is made on it."""
+    per kind and panel, at each budget, each variant's mean over the runs, its t-interval and the
+    runs' values (the fixed modes played with each run's own co-trained prey). Where a condition's
+    first parts of a kind are in, both budgets hold the same runs, those seeds; where none is, 10^6
+    holds them all and 15,000 is absent. Descriptive: no test is made on it."""
     rows = []
     for kind in KINDS:
         for condition in CONDITIONS:
-            mine = {
-                budget: sorted((r for r in source if (r["condition"], r["kind"]) == (condition, kind)), key=_seed)
-                for budget, source in ((BUDGETS[0], first_parts), (BUDGETS[-1], runs))
-            }
+            early = sorted((r for r in first_parts if (r["condition"], r["kind"]) == (condition, kind)), key=_seed)
+            late = sorted((r for r in runs if (r["condition"], r["kind"]) == (condition, kind)), key=_seed)
+            if early:  # the same runs at both budgets
+                late = [r for r in late if r["seed"] in {e["seed"] for e in early}]
+                early = [r for r in early if r["seed"] in {e["seed"] for e in late}]
+            mine = {BUDGETS[0]: early, BUDGETS[-1]: late}
             predators = sorted({p for held in mine.values() for r in held for p in r["paper"]["panels"]})
             for predator in predators:
                 budgets: dict[str, dict[str, Any]] = {}
@@ -303,6 +313,7 @@ def summarise(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]] | No
     if not done:
         raise ValueError(f"no condition has its 10 judged runs of both kinds yet (so far: {waiting})")
     runs = [r for r in runs if r["condition"] in done]
+    read_parts = len(first_parts or [])
     first_parts = [r for r in first_parts or [] if r["condition"] in done]
     if other := {r["build"] for r in first_parts} - {r["build"] for r in runs}:
         raise ValueError(f"first parts trained by {', '.join(sorted(other))}, not the judged runs' build")
@@ -333,6 +344,12 @@ def summarise(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]] | No
         },
         "curves": curves(runs),
         "fig2": fig2(runs, first_parts),
+        "first_parts": {
+            "in": read_parts,
+            "of": len(CONDITIONS) * len(KINDS) * len(SEEDS),
+            "drawn": len(first_parts),
+            "same_as_judged": sum(bool(r.get("same_as_judged")) for r in first_parts),
+        },
     }
 
 
@@ -452,7 +469,7 @@ def markdown(summary: dict[str, Any]) -> str:
             cells.append(row.get("verdict", "– (interim)"))
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
-    out += fig2_markdown(summary["fig2"])
+    out += fig2_markdown(summary["fig2"], summary["first_parts"])
     out += ["## Secondary: the prey's wall rate against budget (descriptive)", ""]
     out += [
         "| condition | predators | " + " | ".join(f"{b:,}" for b in BUDGETS) + " | own prey at 10^6 |",
@@ -466,19 +483,22 @@ def markdown(summary: dict[str, Any]) -> str:
     return "\n".join(out)
 
 
-def fig2_markdown(rows: list[dict[str, Any]]) -> list[str]:
+def fig2_markdown(rows: list[dict[str, Any]], parts: dict[str, int]) -> list[str]:
     """Fig. 2's table: per kind and panel, each variant's mean [95 % t-interval] over the runs at
     15,000 episodes (the first parts) and at 10^6, with the runs each holds."""
     first, final = (str(b) for b in (BUDGETS[0], BUDGETS[-1]))
-    held = sum(len(r["budgets"].get(first, {}).get("seeds", [])) for r in rows if r["predator"] == "predator_0")
     out = [
         f"## The paper's Fig. 2 of the same runs at {BUDGETS[0]:,} and {BUDGETS[-1]:,} episodes (descriptive; added "
         "after the protocol)",
         "",
-        "Each run against always-chase and always-stalk with its own co-trained prey, 1000 episodes a variant "
-        f"(seed {SETTINGS['eval_seed']}); at {BUDGETS[0]:,} episodes the runs' first parts, trained again by the "
-        "pinned build and replayed to the bit against the rule study's result, played by the same evaluation "
-        f"(`run.py --paper-first`; {held} of the judged runs' first parts in). Mean [95 % t-interval] over the runs.",
+        f"Each run against always-chase and always-stalk with its own co-trained prey, {PAPER_EPISODES} episodes "
+        f"a variant (seed {SETTINGS['eval_seed']}); at {BUDGETS[0]:,} episodes the runs' first parts, trained "
+        "again by the pinned build and replayed to the bit against the rule study's result, then played by the "
+        f"same protocol (`run.py --paper-first`; {parts['in']} of the {parts['of']} first parts in, "
+        f"{parts['drawn']} drawn: those of the conditions whose judged runs are all in; {parts['same_as_judged']} "
+        "of them also checked to the bit against the judged run's own result at that budget, committed before "
+        "they were played). Where a kind's first parts are in, both budgets hold those runs only. Mean [95 % "
+        "t-interval] over the runs.",
         "",
         "| kind | panel | episodes | runs | trained | always-chase | always-stalk |",
         "|---|---|---:|---:|---:|---:|---:|",
@@ -516,5 +536,7 @@ def write_report(where: Path, out: Path) -> dict[str, Any]:
         "budgets": [{"episodes": b} for b in BUDGETS],
     }
     atomic_write_bytes(out / "budget-study.png", pool_png(figure, measure="pool return"))
-    atomic_write_bytes(out / "budget-fig2.png", fig2_budgets_png(summary["fig2"], [str(BUDGETS[0]), str(BUDGETS[-1])]))
+    atomic_write_bytes(
+        out / "budget-fig2.png", fig2_budgets_png(summary["fig2"], [str(BUDGETS[0]), str(BUDGETS[-1])], PAPER_EPISODES)
+    )
     return summary

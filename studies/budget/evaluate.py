@@ -22,9 +22,12 @@ numbers, predators greedy, a learned prey ε-greedy with ε 0.1):
   rate, the co-trained prey's outcomes (secondary 6).
 
 With ``--first-part`` the run is a first part alone (the driver's ``--paper-first``, added after
-the protocol, descriptive: PLAN.md, "Fig. 2 at 15,000 episodes"): after the same replay, only the
-paper's comparison at its end is written (format ``budget-study-paper-1``), so that the report
-draws Fig. 2 of the same runs at 15,000 episodes beside 10^6, by the same evaluation.
+the protocol, descriptive: PLAN.md, "Fig. 2 at 15,000 episodes"): its checkpoint must be at the
+first budget; after the same replay, and, where the judged run's result is committed, a check
+that the first part played against the first budget's population gives that result's
+``same_budget`` at 15,000 to the bit, only the paper's comparison at its end is written (format
+``budget-study-paper-1``), so that the report draws Fig. 2 of the same runs at 15,000 episodes
+beside 10^6.
 
     python studies/budget/evaluate.py RUN --condition 3p-low-shared --build d9886b9… \\
         --populations pursuit_bench/pretrained/populations --out results/budget-study/runs
@@ -137,17 +140,44 @@ def paper_comparison(run: Path, condition: str, checkpoint: str, episodes: int, 
     }
 
 
-def evaluate_first_part(run: Path, condition: str, first: int, episodes: int, seed: int) -> dict[str, Any]:
-    """A first part's evaluation (PLAN.md, "Fig. 2 at 15,000 episodes", descriptive): the paper's
-    comparison at its end, which must be ``first`` episodes."""
+def first_part_episodes(run: Path, first: int) -> None:
+    """SystemExit unless the run folder's last checkpoint is a first part's end, ``first`` episodes."""
     from pursuit_bench.training import runs
-    from pursuit_bench.training.evaluate import PROTOCOL
 
     done = int(runs.load_checkpoint(run)["episodes_done"])
     if done != first:
         raise SystemExit(f"{run}: its checkpoint holds {done} episodes, not the first part's {first}")
-    paper = paper_comparison(run, condition, runs.CHECKPOINT, episodes, seed)
-    return {"protocol": PROTOCOL, "budget": first, "paper": paper}
+
+
+def same_as_judged(run: Path, condition: str, populations: Path, judged: Path, first: int, episodes: int) -> bool:
+    """Whether the budget study's committed result of this run (``judged/<run>.json.gz``) is there
+    to check against; SystemExit if it is and this first part's end, played against the first
+    budget's population by the protocol, differs from its ``same_budget`` at that budget in any bit
+    (the first part is the judged run's own 15,000 episodes, evaluated as its result was)."""
+    from pursuit_bench.reports import rule_study
+    from pursuit_bench.training import runs
+
+    path = judged / f"{run.name}.json.gz"
+    if not path.exists():
+        return False
+    committed = json.loads(gzip.decompress(path.read_bytes()))
+    folder = populations / population_name(first) / condition
+    played = rule_study.evaluate_checkpoint(
+        run, runs.CHECKPOINT, folder, episodes=episodes, seed=EVAL_SEED, outcomes=True
+    )
+    if json.loads(json.dumps(played)) != committed["same_budget"][str(first)]:
+        raise SystemExit(f"{run.name}: its first part differs from the budget study's judged run at {first} episodes")
+    return True
+
+
+def evaluate_first_part(run: Path, condition: str, first: int, paper_episodes: int, checked: bool) -> dict[str, Any]:
+    """A first part's compact result (PLAN.md, "Fig. 2 at 15,000 episodes", descriptive): the
+    paper's comparison at its end; ``checked``: whether :func:`same_as_judged` compared it."""
+    from pursuit_bench.training import runs
+    from pursuit_bench.training.evaluate import PROTOCOL
+
+    paper = paper_comparison(run, condition, runs.CHECKPOINT, paper_episodes, EVAL_SEED)
+    return {"protocol": PROTOCOL, "eval_seed": EVAL_SEED, "budget": first, "same_as_judged": checked, "paper": paper}
 
 
 def write(out: Path, run: Path, condition: str, build: str, result: dict[str, Any], form: str = FORMAT) -> Path:
@@ -182,6 +212,12 @@ def main() -> int:
     parser.add_argument("--episodes", type=int, default=EPISODES, help="(trying the driver only)")
     parser.add_argument("--paper-episodes", type=int, default=PAPER_EPISODES, help="(trying the driver only)")
     parser.add_argument("--rule-results", type=Path, default=ROOT / "results" / "rule-study" / "runs")
+    parser.add_argument(
+        "--judged-results",
+        type=Path,
+        default=ROOT / "results" / "budget-study" / "runs",
+        help="With --first-part: the judged runs' committed results, which a first part must match at its budget.",
+    )
     parser.add_argument("--no-replay-check", action="store_true", help="(trying the driver only)")
     parser.add_argument(
         "--first-part",
@@ -191,6 +227,8 @@ def main() -> int:
     )
     args = parser.parse_args()
     budgets = tuple(int(b) for b in args.budgets.split(","))
+    if args.first_part:
+        first_part_episodes(args.run, budgets[0])
     if not args.no_replay_check:
         dirty = subprocess.run(
             ["git", "status", "--porcelain", "--", "pursuit_bench", "studies/budget"],
@@ -203,7 +241,10 @@ def main() -> int:
         # a first part's end is its last checkpoint: it keeps none of its own length
         replay(args.run, args.condition, args.rule_results, checkpoint=runs.CHECKPOINT if args.first_part else None)
     if args.first_part:
-        result = evaluate_first_part(args.run, args.condition, budgets[0], args.paper_episodes, EVAL_SEED)
+        checked = not args.no_replay_check and same_as_judged(
+            args.run, args.condition, args.populations, args.judged_results, budgets[0], args.episodes
+        )
+        result = evaluate_first_part(args.run, args.condition, budgets[0], args.paper_episodes, checked)
         print(write(args.out, args.run, args.condition, args.build, result, FIRST_PART_FORMAT))
         return 0
     result = evaluate(

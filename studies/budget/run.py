@@ -30,8 +30,9 @@ trains only the judged runs' first parts, in a work folder of its own, and plays
 paper's protocol at its end (``evaluate.py --first-part``, after the same replay check), so that
 the report draws the same runs' Fig. 2 at 15,000 beside 10^6 by the same evaluation:
 
-    cd /work/budget-eval && PYTHONPATH=/work/budget-build nohup nice -n 19 /work/main/.venv/bin/python \\
+    cd /work/budget-paper-run && PYTHONPATH=/work/budget-build nohup nice -n 19 /work/main/.venv/bin/python \\
         studies/budget/run.py --paper-first --work /work/budget-paper \\
+        --judged-results /work/main/results/budget-study/runs \\
         --results /work/main/results/budget-study/paper-15000 > /dev/null 2>&1 &
 """
 
@@ -362,7 +363,7 @@ def evaluate_judged(args: Any, condition: str, run: Path, first_part: bool = Fal
     if args.no_replay_check:
         command.append("--no-replay-check")
     if first_part:
-        command.append("--first-part")
+        command += ["--first-part", "--judged-results", str(args.judged_results)]
         log(args.work, f"{run.name}: evaluating its first part (the paper's protocol at its end)")
     else:
         log(args.work, f"{run.name}: evaluating (populations of every budget, the paper's protocol at the last)")
@@ -378,12 +379,22 @@ def paper_first(args: Any, condition: str, kind: str, stop: list[bool]) -> bool:
     """``--paper-first`` (PLAN.md, "Fig. 2 at 15,000 episodes": added after the protocol,
     descriptive): a kind's judged runs' first part trained again by the rule study's plan and, as
     each ends, evaluated by ``evaluate.py --first-part`` (replayed to the bit against the rule
-    study's committed result, then the paper's comparison at its end), its compact result kept in
-    ``--results``; a run with one is not trained again. Whether all are done."""
+    study's committed result and, where it is committed, against the budget study's own judged
+    run; then the paper's comparison at its end), its compact result kept in ``--results``; a run
+    with one is not trained again, and a chunk's runs trained in part by an earlier chunk (a stop)
+    go on from where they were. Whether all are done."""
     import dataclasses
+    import gzip
+
+    from pursuit_bench.training.sweep import open_sweep
 
     tag = f"paper-{kind}-{condition}"
-    rest = [s for s in design.JUDGED_SEEDS if not kept(args, "judged", condition, kind, s)]
+    seeds = design.JUDGED_SEEDS[: args.judged_seeds]
+    for seed in seeds:
+        path = args.results / f"{design.run_name(condition, kind, seed)}.json.gz"
+        if path.is_file() and json.loads(gzip.decompress(path.read_bytes())).get("format") != "budget-study-paper-1":
+            raise SystemExit(f"{path}: not a first part's result: give --paper-first a --results of its own")
+    rest = [s for s in seeds if not kept(args, "judged", condition, kind, s)]
     if not rest:
         log(args.work, f"{tag}: every run's first part is evaluated: not trained again")
         return True
@@ -391,6 +402,11 @@ def paper_first(args: Any, condition: str, kind: str, stop: list[bool]) -> bool:
     for chunk in consecutive(rest, len(rest)):
         plan = dataclasses.replace(rule_plan, predators=(kind,), first_seed=chunk[0], seeds=len(chunk))
         first = args.work / "first" / f"{tag}-seeds{chunk[0]}-{chunk[-1]}"
+        names = sorted(plan.runs())
+        if not first.exists():
+            open_sweep(first, plan)  # the plan first: a sweep's folder holds its plan before its runs
+        (first / "runs").mkdir(parents=True, exist_ok=True)
+        gather(args.work / "first", tag, first, names)  # a run begun in an earlier chunk's folder
 
         def finished(name: str, first: Path = first) -> None:
             if not (args.results / f"{name}.json.gz").is_file():
@@ -399,7 +415,7 @@ def paper_first(args: Any, condition: str, kind: str, stop: list[bool]) -> bool:
         log(args.work, f"{tag}: seeds {chunk[0]}-{chunk[-1]}, {args.budgets[0]} episodes by the rule study's plan")
         if stop[0] or not sweep(args.work, first, plan, args.workers, stop, finished):
             return False
-        for name in sorted(plan.runs()):
+        for name in names:
             finished(name)  # trained earlier, or heard of before a stop
     return True
 
@@ -555,6 +571,12 @@ def main() -> int:
         "--judged-seeds", type=int, default=len(design.JUDGED_SEEDS), help="Only by PROTOCOL.md's cut: 6 to 10."
     )
     parser.add_argument("--rule-results", type=Path, default=ROOT / "results" / "rule-study" / "runs")
+    parser.add_argument(
+        "--judged-results",
+        type=Path,
+        default=ROOT / "results" / "budget-study" / "runs",
+        help="With --paper-first: the judged runs' results, which a first part must match where committed.",
+    )
     parser.add_argument("--rule-population", type=Path, default=None, help="Default: the package's rule-study.")
     parser.add_argument("--no-replay-check", action="store_true", help="(trying the driver only)")
     parser.add_argument(
@@ -625,6 +647,8 @@ def main() -> int:
     if trying and args.work == WORK:
         print("trying the driver (--budgets, --preset …): give another --work than the study's", file=sys.stderr)
         return 2
+    if args.paper_first and args.populations is None:  # the committed populations a first part is checked on
+        args.populations = ROOT / "pursuit_bench" / "pretrained" / "populations"
     args.populations = args.populations or args.work / "populations"
     args.results = args.results or args.work / "results"
     args.work.mkdir(parents=True, exist_ok=True)
