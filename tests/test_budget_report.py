@@ -210,8 +210,20 @@ def test_fig2_holds_the_same_runs_at_both_budgets_and_says_which_are_not_yet_pla
         assert row["budgets"][first]["seeds"] == list(range(10))
         assert row["budgets"][first]["trained"]["mean"] == pytest.approx(np.mean(early))
         assert row["budgets"][first]["always_chase"]["ci"] == pytest.approx([0.4, 0.4])
+    drawn = [(c, q) for c in ("3p-low-shared", "2p-high-shared") for q in range(PREDATORS[c])]
+    for kind in ("hierarchical", "flat"):  # the paper's count per seed: above both fixed modes (0.4, 0.45)
+        strict = summary["fig2_strict"][kind]
+        assert strict[first] == {
+            "panels": 5,
+            "per_seed": {str(seed): sum(early_value(seed, q) > 0.45 for _, q in drawn) for seed in range(10)},
+        }
+        assert strict[final] == {"panels": 5, "per_seed": {str(seed): 5 for seed in range(10)}}  # 1p-high unplayed
     text = budget_report.markdown(summary)
     assert "40 of the 60 first parts in, 40 drawn" in text and "20 of them also checked" in text
+    assert (
+        "of the 5 panels played at both budgets, those where the learned predator is above both fixed modes, "
+        "per seed: at 15,000 episodes seed 0: 0, seed 1: 0" in text
+    )
     assert "| flat | 1p-high predator_0 | 15,000 | not yet played |" in text
     (tmp_path / budget_report.MARKER).write_text("{}\n")
     code, output = run_cli("report", str(tmp_path), "--out", str(tmp_path / "out"))

@@ -145,6 +145,31 @@ def fig2(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]]) -> list[
     return rows
 
 
+def fig2_strict(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The paper's count per seed on Fig. 2's data, comparable across the budgets: per kind, over
+    the panels drawn at both budgets (the same runs), for each seed at each budget, in how many of
+    them the learned predator's mean is above both fixed modes' (a tie is no win). Descriptive."""
+    both = (str(BUDGETS[0]), str(BUDGETS[-1]))
+    out: dict[str, Any] = {}
+    for kind in KINDS:
+        out[kind] = {}
+        for budget in both:
+            panels = [r["budgets"][budget] for r in rows if r["kind"] == kind and all(b in r["budgets"] for b in both)]
+            counts: dict[str, int] = {}
+            for entry in panels:
+                for i, seed in enumerate(entry["seeds"]):
+                    above = all(
+                        entry["trained"]["values"][i] > entry[b]["values"][i] + stats.TIE
+                        for b in ("always_chase", "always_stalk")
+                    )
+                    counts[str(seed)] = counts.get(str(seed), 0) + int(above)
+            out[kind][budget] = {
+                "panels": len(panels),
+                "per_seed": dict(sorted(counts.items(), key=lambda c: int(c[0]))),
+            }
+    return out
+
+
 def _seed(run: dict[str, Any]) -> int:
     return int(run["seed"])
 
@@ -343,7 +368,8 @@ def summarise(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]] | No
             "wall_rates": wall_rates(runs),
         },
         "curves": curves(runs),
-        "fig2": fig2(runs, first_parts),
+        "fig2": (drawn := fig2(runs, first_parts)),
+        "fig2_strict": fig2_strict(drawn),
         "first_parts": {
             "in": read_parts,
             "of": len(CONDITIONS) * len(KINDS) * len(SEEDS),
@@ -470,6 +496,17 @@ def markdown(summary: dict[str, Any]) -> str:
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
     out += fig2_markdown(summary["fig2"], summary["first_parts"])
+    for kind, budgets in summary["fig2_strict"].items():
+        panels = next(iter(budgets.values()))["panels"]
+        said = [
+            f"at {int(b):,} episodes " + ", ".join(f"seed {s}: {n}" for s, n in c["per_seed"].items())
+            for b, c in budgets.items()
+        ]
+        out += [
+            f"{kind.capitalize()}: of the {panels} panels played at both budgets, those where the learned predator "
+            "is above both fixed modes, per seed: " + ("; ".join(said) if panels else "none yet") + ".",
+            "",
+        ]
     out += ["## Secondary: the prey's wall rate against budget (descriptive)", ""]
     out += [
         "| condition | predators | " + " | ".join(f"{b:,}" for b in BUDGETS) + " | own prey at 10^6 |",
