@@ -9,8 +9,9 @@ conditions and seeds, 15,000 episodes of the reproduction preset (``pursuit-benc
 
 One run at a time, in the order of ``RUNS``; a run's folder is ``WORK/runs/NAME`` (BenchMARL's
 checkpoints: rerunning resumes there), its score ``RESULTS/NAME.score.json`` (committed). A run
-with a score is done and skipped. SIGTERM or SIGINT stops the run in progress (it resumes from
-its last checkpoint, up to ten batches back) and the driver. Progress in ``WORK/progress.log``.
+with a score is done and skipped; ``--only`` names the runs to do. SIGTERM or SIGINT stops the
+run in progress (it resumes from its last checkpoint, up to ten batches back) and the driver.
+Progress in ``WORK/progress.log``.
 """
 
 from __future__ import annotations
@@ -69,7 +70,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--work", type=Path, required=True, help="Run folders, scores in progress, the log.")
     parser.add_argument("--results", type=Path, required=True, help="Where each run's score.json lands.")
+    parser.add_argument(
+        "--only",
+        default=None,
+        help="Comma-separated run names (e.g. 3p-high-individual-iql-seed2): only these, in RUNS' order "
+        "(a session's last hour fits a short row, not the next in order).",
+    )
     args = parser.parse_args()
+    names = [f"{c}-{a}-seed{s}" for c, a, s in RUNS]
+    only = set(names) if args.only is None else set(args.only.split(","))
+    if unknown := sorted(only - set(names)):
+        print(f"--only: unknown run {', '.join(unknown)}; expected names such as {names[-1]}", file=sys.stderr)
+        sys.exit(2)
     args.work.mkdir(parents=True, exist_ok=True)
     args.results.mkdir(parents=True, exist_ok=True)
     signal.signal(signal.SIGTERM, stop)
@@ -81,7 +93,7 @@ def main() -> None:
             return
         name = f"{condition}-{algorithm}-seed{seed}"
         result = args.results / f"{name}.score.json"
-        if result.exists():
+        if result.exists() or name not in only:
             continue
         folder = args.work / "runs" / name
         if algorithm in OURS:
