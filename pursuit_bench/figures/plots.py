@@ -98,6 +98,15 @@ def _png(fig: Any) -> bytes:
     return buffer.getvalue()
 
 
+def _seed_bar(ax: Any, x: float, cell: dict[str, Any], color: str) -> None:
+    """A bar at ``cell``'s mean over seeds, its interval (where it has one) and each seed's value as a dot."""
+    ax.bar(x, cell["mean"], color=color, width=0.7)
+    if cell["ci"] is not None:
+        lo, hi = cell["ci"]
+        ax.errorbar(x, cell["mean"], yerr=[[cell["mean"] - lo], [hi - cell["mean"]]], color="black", capsize=3, lw=1)
+    ax.scatter([x] * len(cell["values"]), cell["values"], color="black", s=6, zorder=3)
+
+
 def fig2_png(table: list[dict[str, Any]]) -> bytes:
     """The paper's Fig. 2 over seeds: one row per condition, one panel per predator; a bar per
     variant at its mean over seeds, its 95 % interval, and each seed's value as a dot."""
@@ -115,11 +124,7 @@ def fig2_png(table: list[dict[str, Any]]) -> bytes:
                 continue
             variants = entries[col]["variants"]
             for x, (name, v) in enumerate(variants.items()):
-                ax.bar(x, v["mean"], color=VARIANT_COLORS.get(name, "grey"), width=0.7)
-                if v["ci"] is not None:
-                    lo, hi = v["ci"]
-                    ax.errorbar(x, v["mean"], yerr=[[v["mean"] - lo], [hi - v["mean"]]], color="black", capsize=3, lw=1)
-                ax.scatter([x] * len(v["values"]), v["values"], color="black", s=6, zorder=3)
+                _seed_bar(ax, x, v, VARIANT_COLORS.get(name, "grey"))
             ax.set_xticks(range(len(variants)), [LABELS.get(n, n) for n in variants], fontsize=7, rotation=20)
             ax.axhline(0.0, color="black", linewidth=0.6)
             ax.set_title(f"{condition} · {entries[col]['predator']}", fontsize=9)
@@ -162,14 +167,9 @@ def fig2_budgets_png(rows: list[dict[str, Any]], budgets: list[str], episodes: i
                             transform=ax.get_xaxis_transform())  # fmt: skip
                     continue
                 for v, name in enumerate(variants):
-                    cell, x = entry[name], left + v
-                    color = VARIANT_COLORS.get(kind if name == "trained" else name, "grey")
-                    ax.bar(x, cell["mean"], color=color, width=0.8)
-                    if cell["ci"] is not None:
-                        lo, hi = cell["ci"]
-                        ax.errorbar(x, cell["mean"], yerr=[[cell["mean"] - lo], [hi - cell["mean"]]], color="black",
-                                    capsize=2, lw=0.8)  # fmt: skip
-                    ax.scatter([x] * len(cell["values"]), cell["values"], color="black", s=4, zorder=3)
+                    _seed_bar(
+                        ax, left + v, entry[name], VARIANT_COLORS.get(kind if name == "trained" else name, "grey")
+                    )
             centres = [g * (len(variants) + 1) + 1 for g in range(len(budgets))]
             ax.set_xlim(-0.7, centres[-1] + 1.7)
             ax.set_xticks(centres, [f"{int(b):,}\nepisodes" for b in budgets], fontsize=7)

@@ -58,23 +58,13 @@ def read_runs(where: Path) -> list[dict[str, Any]]:
     """Every compact result under ``where/runs``, checked against the protocol's settings: its
     format, name, condition, kind, seed (0–9, each run once), evaluation settings, budgets and
     population size, one training build for all; ValueError naming the file otherwise."""
-    runs, seen = [], set()
-    for path in sorted((where / "runs").glob("*.json.gz")):
-        with gzip.open(path, "rt") as file:
-            run = json.load(file)
-        key = (run.get("condition"), run.get("kind"), run.get("seed"))
+    runs = []
+    for path, run in _judged_files(where / "runs", FORMAT):
         wrong = [k for k, v in SETTINGS.items() if run.get(k) != v]
-        if run.get("format") != FORMAT:
-            raise ValueError(f"{path}: format {run.get('format')!r}, expected {FORMAT!r}")
-        if key[0] not in CONDITIONS or key[1] not in KINDS or key[2] not in SEEDS:
-            raise ValueError(f"{path}: {key} is not a judged run of the study (its conditions, kinds, seeds 0–9)")
-        if path.name != f"{key[0]}-{key[1]}-seed{key[2]}.json.gz" or key in seen:
-            raise ValueError(f"{path}: named otherwise than its run {key}, or a second file of it")
         if wrong or run["paper"].get("episodes") != PAPER_EPISODES:
             raise ValueError(f"{path}: not the protocol's evaluation ({', '.join(wrong) or 'paper episodes'} differ)")
         if any(len(run["same_budget"][str(b)]) != MEMBERS for b in BUDGETS):
             raise ValueError(f"{path}: a population of other than {MEMBERS} members")
-        seen.add(key)
         runs.append(run)
     builds = {r["build"] for r in runs}
     if len(builds) > 1:
@@ -85,17 +75,8 @@ def read_runs(where: Path) -> list[dict[str, Any]]:
 def read_first_parts(where: Path) -> list[dict[str, Any]]:
     """The first parts' compact results under ``where/paper-15000`` (none where the folder is
     absent), each checked: its format, run, budget and evaluation; ValueError naming the file."""
-    parts, seen = [], set()
-    for path in sorted((where / FIRST_PARTS).glob("*.json.gz")):
-        with gzip.open(path, "rt") as file:
-            run = json.load(file)
-        key = (run.get("condition"), run.get("kind"), run.get("seed"))
-        if run.get("format") != FIRST_PART_FORMAT:
-            raise ValueError(f"{path}: format {run.get('format')!r}, expected {FIRST_PART_FORMAT!r}")
-        if key[0] not in CONDITIONS or key[1] not in KINDS or key[2] not in SEEDS:
-            raise ValueError(f"{path}: {key} is not a judged run of the study (its conditions, kinds, seeds 0–9)")
-        if path.name != f"{key[0]}-{key[1]}-seed{key[2]}.json.gz" or key in seen:
-            raise ValueError(f"{path}: named otherwise than its run {key}, or a second file of it")
+    parts = []
+    for path, run in _judged_files(where / FIRST_PARTS, FIRST_PART_FORMAT):
         if (run.get("budget"), run.get("protocol"), run.get("eval_seed")) != (
             BUDGETS[0],
             SETTINGS["protocol"],
@@ -107,9 +88,28 @@ def read_first_parts(where: Path) -> list[dict[str, Any]]:
             )
         if run["paper"].get("episodes") != PAPER_EPISODES:
             raise ValueError(f"{path}: not the paper's protocol ({PAPER_EPISODES} episodes a variant)")
-        seen.add(key)
         parts.append(run)
     return parts
+
+
+def _judged_files(folder: Path, form: str) -> list[tuple[Path, dict[str, Any]]]:
+    """Every compact result in ``folder`` (none where it is absent) with its path, its identity
+    checked: format ``form``, a judged run of the study (its conditions, kinds, seeds 0–9), named
+    after its run, each run once; ValueError naming the file otherwise."""
+    out, seen = [], set()
+    for path in sorted(folder.glob("*.json.gz")):
+        with gzip.open(path, "rt") as file:
+            run = json.load(file)
+        key = (run.get("condition"), run.get("kind"), run.get("seed"))
+        if run.get("format") != form:
+            raise ValueError(f"{path}: format {run.get('format')!r}, expected {form!r}")
+        if key[0] not in CONDITIONS or key[1] not in KINDS or key[2] not in SEEDS:
+            raise ValueError(f"{path}: {key} is not a judged run of the study (its conditions, kinds, seeds 0–9)")
+        if path.name != f"{key[0]}-{key[1]}-seed{key[2]}.json.gz" or key in seen:
+            raise ValueError(f"{path}: named otherwise than its run {key}, or a second file of it")
+        seen.add(key)
+        out.append((path, run))
+    return out
 
 
 def fig2(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]]) -> list[dict[str, Any]]:
