@@ -38,3 +38,4 @@ def test_only_does_the_runs_named_and_no_other(tmp_path: Path) -> None:
     code, stderr = drive(tmp_path, "--only", "3p-high-individual-iql-seed2")
     assert code == 0, stderr
     assert not (tmp_path / "work" / "runs").exists()  # the one named is scored, the others not named: none trained
+    assert (tmp_path / "work" / "progress.log").read_text().rstrip().endswith("every run named by --only scored")

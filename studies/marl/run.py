@@ -122,7 +122,7 @@ def main() -> None:
         shutil.copyfile(scored / "score.json", partial)
         partial.replace(result)
         log(args.work, f"{name}: scored, {result}")
-    log(args.work, "every run scored")
+    log(args.work, "every run scored" if args.only is None else "every run named by --only scored")
 
 
 if __name__ == "__main__":
