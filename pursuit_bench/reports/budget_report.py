@@ -124,8 +124,8 @@ def fig2(runs: list[dict[str, Any]], first_parts: list[dict[str, Any]]) -> list[
             early = sorted((r for r in first_parts if (r["condition"], r["kind"]) == (condition, kind)), key=_seed)
             late = sorted((r for r in runs if (r["condition"], r["kind"]) == (condition, kind)), key=_seed)
             if early:  # the same runs at both budgets
-                late = [r for r in late if r["seed"] in {e["seed"] for e in early}]
-                early = [r for r in early if r["seed"] in {e["seed"] for e in late}]
+                shared = {r["seed"] for r in early} & {r["seed"] for r in late}
+                early, late = ([r for r in held if r["seed"] in shared] for held in (early, late))
             mine = {BUDGETS[0]: early, BUDGETS[-1]: late}
             predators = sorted({p for held in mine.values() for r in held for p in r["paper"]["panels"]})
             for predator in predators:
@@ -158,16 +158,19 @@ def fig2_strict(rows: list[dict[str, Any]]) -> dict[str, Any]:
             counts: dict[str, int] = {}
             for entry in panels:
                 for i, seed in enumerate(entry["seeds"]):
-                    above = all(
-                        entry["trained"]["values"][i] > entry[b]["values"][i] + stats.TIE
-                        for b in ("always_chase", "always_stalk")
-                    )
+                    above = above_both({v: entry[v]["values"][i] for v in VARIANTS})
                     counts[str(seed)] = counts.get(str(seed), 0) + int(above)
             out[kind][budget] = {
                 "panels": len(panels),
                 "per_seed": dict(sorted(counts.items(), key=lambda c: int(c[0]))),
             }
     return out
+
+
+def above_both(cell: dict[str, float]) -> bool:
+    """Whether a panel's learned predator (``trained``) is above both fixed modes (a tie is no win):
+    the paper's count, one seed's panel."""
+    return all(cell["trained"] > cell[b] + stats.TIE for b in ("always_chase", "always_stalk"))
 
 
 def _seed(run: dict[str, Any]) -> int:
@@ -277,13 +280,7 @@ def paper(runs: list[dict[str, Any]], whole: bool, margin: float = stats.EQUIVAL
         seeds = sorted({r["seed"] for r in mine})
         strict = {
             str(s): sum(
-                all(
-                    r["paper"]["panels"][p]["trained"] > r["paper"]["panels"][p][b] + stats.TIE
-                    for b in ("always_chase", "always_stalk")
-                )
-                for r in mine
-                if r["seed"] == s
-                for p in r["paper"]["panels"]
+                above_both(r["paper"]["panels"][p]) for r in mine if r["seed"] == s for p in r["paper"]["panels"]
             )
             for s in seeds
         }
